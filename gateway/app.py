@@ -1,0 +1,57 @@
+"""The app factory: one place that wires config, storage, services and controllers."""
+
+from __future__ import annotations
+
+from litestar import Litestar
+from litestar.datastructures import State
+from litestar.di import Provide
+from litestar.openapi import OpenAPIConfig
+
+from gateway import __version__
+from gateway.controllers.auth import AdminController, AuthController
+from gateway.controllers.health import health
+from gateway.controllers.parts import PART_CONTROLLERS
+from gateway.controllers.records import EncounterController, PatientController
+from gateway.controllers.sync import SyncController
+from gateway.dependencies import Services, provide_principal, provide_services
+from gateway.errors import EXCEPTION_HANDLERS
+from gateway.storage.database import Database
+from schemas.config import Config
+
+MAX_JSON_BODY = 4 * 1024 * 1024
+
+
+def create_app(config: Config) -> Litestar:
+    db = Database(
+        config.gateway.database,
+        synchronous=config.gateway.sqlite_synchronous,
+        busy_timeout_ms=config.gateway.busy_timeout_ms,
+    )
+    db.migrate()
+    services = Services.build(config, db)
+    return Litestar(
+        route_handlers=[
+            health,
+            AuthController,
+            AdminController,
+            PatientController,
+            EncounterController,
+            *PART_CONTROLLERS,
+            SyncController,
+        ],  # fmt: skip
+        dependencies={
+            "services": Provide(provide_services, sync_to_thread=False),
+            "principal": Provide(provide_principal, sync_to_thread=False),
+        },
+        exception_handlers=EXCEPTION_HANDLERS,
+        openapi_config=OpenAPIConfig(
+            title="burnedge gateway",
+            version=__version__,
+            description="Clinical record, capture and sync API of a burnedge clinic gateway. "
+            "Outputs are decision support, never autonomous decisions.",
+            path="/schema",
+        ),
+        state=State({"services": services}),
+        on_shutdown=[db.close],
+        request_max_body_size=MAX_JSON_BODY,
+    )

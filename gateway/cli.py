@@ -1,0 +1,151 @@
+"""The `burnedge` command line. Errors from any package are turned into messages and exit codes here."""
+
+from __future__ import annotations
+
+import argparse
+import getpass
+import json
+import logging
+import sys
+from pathlib import Path
+
+import msgspec
+
+from schemas.config import Config, load_config
+from schemas.errors import AuthenticationFailed, BurnedgeError, Conflict, InvalidInput, NotFound
+
+log = logging.getLogger("burnedge")
+
+EXIT_CODES: list[tuple[type[BurnedgeError], int]] = [
+    (InvalidInput, 2),
+    (NotFound, 3),
+    (Conflict, 4),
+    (AuthenticationFailed, 5),
+    (BurnedgeError, 1),
+]
+
+
+def _config(args: argparse.Namespace) -> Config:
+    config = load_config(args.config)
+    gateway = config.gateway
+    overrides = {k: v for k, v in {"database": args.db, "host": getattr(args, "host", None),
+                                   "port": getattr(args, "port", None)}.items() if v is not None}  # fmt: skip
+    if overrides:
+        gateway = msgspec.structs.replace(gateway, **overrides)
+    return msgspec.structs.replace(config, gateway=gateway)
+
+
+def cmd_serve(args: argparse.Namespace) -> int:
+    from gateway.server import serve
+
+    serve(_config(args))
+    return 0
+
+
+def cmd_demo(args: argparse.Namespace) -> int:
+    from gateway.demo import run_demo
+
+    run_demo(_config(args), serve_after=not args.no_serve)
+    return 0
+
+
+def cmd_users_add(args: argparse.Namespace) -> int:
+    from gateway.dependencies import Services
+    from gateway.storage.database import Database
+    from schemas.accounts import Role, UserCreate
+
+    config = _config(args)
+    password = sys.stdin.readline().rstrip("\n") if args.password_stdin else getpass.getpass("Password: ")
+    db = Database(config.gateway.database, synchronous=config.gateway.sqlite_synchronous)
+    try:
+        db.migrate()
+        body = msgspec.convert(
+            {"username": args.username, "password": password, "role": args.role, "display_name": args.name or ""},
+            UserCreate,
+        )
+        user = Services.build(config, db).accounts.create_user(None, body)
+    except msgspec.ValidationError as exc:
+        raise InvalidInput(f"{exc} (usernames: lower-case letters, digits . _ -; passwords: 10+ characters;"
+                           f" roles: {', '.join(r.value for r in Role)})") from exc  # fmt: skip
+    finally:
+        db.close()
+    print(json.dumps({"id": user.id, "username": user.username, "role": user.role.value}))
+    return 0
+
+
+def cmd_audit_verify(args: argparse.Namespace) -> int:
+    from gateway.services.audit_trail import verify
+    from gateway.storage.database import Database
+
+    config = _config(args)
+    if not Path(config.gateway.database).exists():
+        raise NotFound(f"no database at {config.gateway.database}")
+    db = Database(config.gateway.database)
+    try:
+        result = verify(db, None)
+    finally:
+        db.close()
+    print(json.dumps(msgspec.to_builtins(result)))
+    return 0 if result.ok else 6
+
+
+def cmd_schemas_export(args: argparse.Namespace) -> int:
+    from schemas.export import export_json_schemas
+
+    written = export_json_schemas(Path(args.dir))
+    print(json.dumps({"dir": str(args.dir), "schemas": len(written)}))
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="burnedge", description="Objective burn assessment at the clinic edge.")
+    parser.add_argument("--config", help="TOML configuration file (see docs/configuration.md)")
+    parser.add_argument("--db", help="SQLite database file (overrides the configuration)")
+    parser.add_argument("-v", "--verbose", action="store_true", help="log debug messages")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    serve = sub.add_parser("serve", help="run the gateway HTTP API")
+    serve.add_argument("--host", help="address to listen on (0.0.0.0 for the clinic network)")
+    serve.add_argument("--port", type=int, help="TCP port")
+    serve.set_defaults(func=cmd_serve)
+
+    demo = sub.add_parser("demo", help="seed a demo patient and accounts, then serve the gateway")
+    demo.add_argument("--host", help="address to listen on")
+    demo.add_argument("--port", type=int, help="TCP port")
+    demo.add_argument("--no-serve", action="store_true", help="seed and check, then exit instead of serving")
+    demo.set_defaults(func=cmd_demo)
+
+    users = sub.add_parser("users", help="manage user accounts").add_subparsers(dest="users_cmd", required=True)
+    add = users.add_parser("add", help="create an account (the first administrator, say)")
+    add.add_argument("--username", required=True)
+    add.add_argument("--role", required=True, choices=["clinician", "nurse", "admin", "consultant"])
+    add.add_argument("--name", help="display name")
+    add.add_argument("--password-stdin", action="store_true", help="read the password from standard input")
+    add.set_defaults(func=cmd_users_add)
+
+    audit = sub.add_parser("audit", help="the audit trail").add_subparsers(dest="audit_cmd", required=True)
+    verify = audit.add_parser("verify", help="check the hash chain; names the first broken entry (exit 6)")
+    verify.set_defaults(func=cmd_audit_verify)
+
+    schemas = sub.add_parser("schemas", help="message schemas").add_subparsers(dest="schemas_cmd", required=True)
+    export = schemas.add_parser("export", help="write JSON Schema for every public message")
+    export.add_argument("dir", help="output folder")
+    export.set_defaults(func=cmd_schemas_export)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    logging.basicConfig(level=logging.DEBUG if args.verbose else logging.INFO,
+                        format="%(asctime)s %(levelname)s %(name)s: %(message)s")  # fmt: skip
+    try:
+        return args.func(args)
+    except BurnedgeError as exc:
+        print(f"burnedge: error: {exc.detail}", file=sys.stderr)
+        return next(code for cls, code in EXIT_CODES if isinstance(exc, cls))
+    except KeyboardInterrupt:
+        return 130
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

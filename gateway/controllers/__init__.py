@@ -1,0 +1,1 @@
+"""Thin HTTP controllers: parse the request, call one service, shape the response."""

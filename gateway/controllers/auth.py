@@ -1,0 +1,92 @@
+"""Login, logout, phone pairing, users and devices."""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+from litestar import Controller, Request, get, post
+from litestar.params import FromPath, HeaderParameter, JSONBody, QueryParameter
+
+from gateway.dependencies import PrincipalDep, ServicesDep, client_address
+from gateway.services import audit_trail
+from schemas.accounts import (
+    Device,
+    DeviceToken,
+    LoginRequest,
+    PairingCode,
+    PairingCodeRequest,
+    PairRequest,
+    Session,
+    User,
+    UserCreate,
+)
+from schemas.audit import AuditEntry, AuditVerification
+
+
+class AuthController(Controller):
+    path = "/api/v1/auth"
+    tags = ["auth"]
+
+    @post("/login", sync_to_thread=True, status_code=200,
+          summary="Exchange username and password for a session token")  # fmt: skip
+    def login(
+        self, request: Request, data: JSONBody[LoginRequest], services: ServicesDep,
+        device_token: Annotated[str | None, HeaderParameter(name="X-Device-Token")] = None,
+    ) -> Session:  # fmt: skip
+        return services.accounts.login(
+            data.username, data.password, client=client_address(request), device_token=device_token
+        )
+
+    @post("/pair", sync_to_thread=False, status_code=201,
+          summary="Exchange a one-time pairing code for this phone's device token")  # fmt: skip
+    def pair(self, request: Request, data: JSONBody[PairRequest], services: ServicesDep) -> DeviceToken:
+        return services.accounts.pair(data, client=client_address(request))
+
+    @post("/logout", sync_to_thread=False, status_code=204, summary="End this session")
+    def logout(self, principal: PrincipalDep, services: ServicesDep) -> None:
+        services.accounts.logout(principal)
+
+    @get("/me", sync_to_thread=False, summary="Who am I")
+    def me(self, principal: PrincipalDep) -> dict:
+        return {"user_id": principal.user_id, "username": principal.username, "role": principal.role.value,
+                "device_id": principal.device_id}  # fmt: skip
+
+
+class AdminController(Controller):
+    path = "/api/v1/admin"
+    tags = ["admin"]
+
+    @post("/users", sync_to_thread=True, summary="Create a user account")
+    def create_user(self, data: JSONBody[UserCreate], principal: PrincipalDep, services: ServicesDep) -> User:
+        return services.accounts.create_user(principal, data)
+
+    @get("/users", sync_to_thread=False, summary="List user accounts")
+    def list_users(self, principal: PrincipalDep, services: ServicesDep) -> list[User]:
+        return services.accounts.list_users(principal)
+
+    @post("/pairing-codes", sync_to_thread=False, summary="Create a short-lived one-time code to pair a phone")
+    def pairing_code(
+        self, data: JSONBody[PairingCodeRequest], principal: PrincipalDep, services: ServicesDep
+    ) -> PairingCode:
+        return services.accounts.create_pairing_code(principal, data)
+
+    @get("/devices", sync_to_thread=False, summary="List paired phones")
+    def devices(self, principal: PrincipalDep, services: ServicesDep) -> list[Device]:
+        return services.accounts.list_devices(principal)
+
+    @post("/devices/{device_id:str}/revoke", sync_to_thread=False, status_code=200,
+          summary="Revoke a phone: its token and sessions stop working at once")  # fmt: skip
+    def revoke(self, device_id: FromPath[str], principal: PrincipalDep, services: ServicesDep) -> Device:
+        return services.accounts.revoke_device(principal, device_id)
+
+    @get("/audit", sync_to_thread=False, summary="Audit entries after a sequence number")
+    def audit_entries(
+        self, principal: PrincipalDep, services: ServicesDep,
+        after: Annotated[int, QueryParameter(ge=0, description="Last sequence number already read")] = 0,
+        limit: Annotated[int, QueryParameter(ge=1, le=1000)] = 200,
+    ) -> list[AuditEntry]:  # fmt: skip
+        return audit_trail.list_entries(services.db, principal, after, limit)
+
+    @get("/audit/verify", sync_to_thread=True, summary="Check the audit hash chain; names the first broken entry")
+    def audit_verify(self, principal: PrincipalDep, services: ServicesDep) -> AuditVerification:
+        return audit_trail.verify(services.db, principal)

@@ -1,0 +1,21 @@
+"""Liveness and readiness: the only endpoint without authentication."""
+
+from __future__ import annotations
+
+from litestar import get
+
+from gateway import __version__
+from gateway.dependencies import ServicesDep
+from schemas.base import Frozen
+
+
+class Health(Frozen):
+    status: str
+    version: str
+    database: str
+
+
+@get("/health", sync_to_thread=False, tags=["health"], summary="Is the gateway up and its database readable?")
+def health(services: ServicesDep) -> Health:
+    services.db.connection().execute("SELECT 1 FROM _sqlite_migrations LIMIT 1").fetchall()
+    return Health(status="ok", version=__version__, database=str(services.db.path.name))

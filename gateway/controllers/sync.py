@@ -1,0 +1,28 @@
+"""Phone sync endpoints: pull the change feed, push queued mutations."""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+from litestar import Controller, get, post
+from litestar.params import JSONBody, QueryParameter
+
+from gateway.dependencies import PrincipalDep, ServicesDep
+from schemas.sync import ChangesPage, PushRequest, PushResponse
+
+
+class SyncController(Controller):
+    path = "/api/v1/sync"
+    tags = ["sync"]
+
+    @get("/changes", sync_to_thread=False, summary="Record versions after a cursor, oldest first")
+    def changes(
+        self, principal: PrincipalDep, services: ServicesDep,
+        since: Annotated[int, QueryParameter(ge=0, description="next_cursor of the previous page")] = 0,
+        limit: Annotated[int, QueryParameter(ge=1, description="Page size (capped by the gateway)")] = 200,
+    ) -> ChangesPage:  # fmt: skip
+        return services.phone_sync.changes(principal, since, limit)
+
+    @post("/push", sync_to_thread=True, status_code=200, summary="Apply queued mutations; safe to retry")
+    def push(self, data: JSONBody[PushRequest], principal: PrincipalDep, services: ServicesDep) -> PushResponse:
+        return services.phone_sync.push(principal, data.mutations)

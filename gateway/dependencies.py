@@ -1,0 +1,57 @@
+"""What handlers get injected: the services and the authenticated principal."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from litestar import Request
+from litestar.di import NamedDependency
+
+from gateway.services.accounts import AccountService
+from gateway.services.permissions import Principal
+from gateway.services.records import RecordService
+from gateway.storage.database import Database
+from schemas.config import Config
+from schemas.errors import AuthenticationFailed
+from sync.phone_sync import PhoneSync
+
+
+@dataclass
+class Services:
+    config: Config
+    db: Database
+    accounts: AccountService
+    records: RecordService
+    phone_sync: PhoneSync
+
+    @classmethod
+    def build(cls, config: Config, db: Database) -> Services:
+        records = RecordService(db, config)
+        return cls(
+            config=config,
+            db=db,
+            accounts=AccountService(db, config.security),
+            records=records,
+            phone_sync=PhoneSync(records, config.gateway.changes_page_max),
+        )
+
+
+def provide_services(request: Request) -> Services:
+    return request.app.state.services
+
+
+def provide_principal(request: Request) -> Principal:
+    header = request.headers.get("authorization", "")
+    scheme, _, token = header.partition(" ")
+    if scheme.lower() != "bearer" or not token.strip():
+        raise AuthenticationFailed("log in first: send Authorization: Bearer <access_token>")
+    return request.app.state.services.accounts.authenticate(token.strip())
+
+
+def client_address(request: Request) -> str:
+    return request.client.host if request.client else "unknown"
+
+
+# Handlers declare these by name ("services", "principal"); the app factory provides them.
+ServicesDep = NamedDependency[Services]
+PrincipalDep = NamedDependency[Principal]

@@ -1,0 +1,89 @@
+"""The one place where errors become HTTP responses: RFC 9457 problem+json.
+
+Our own BurnedgeError subclasses carry their status; Litestar's own exceptions
+(bad JSON, wrong types, unknown fields, unknown routes) are reshaped to the same
+form; anything unexpected is logged and answered 500 without internals.
+"""
+
+from __future__ import annotations
+
+import logging
+from http import HTTPStatus
+
+from litestar import Request, Response
+from litestar.exceptions import HTTPException, ValidationException
+
+from schemas.errors import BurnedgeError, TooManyAttempts
+from schemas.problem import FieldProblem, Problem
+
+log = logging.getLogger("burnedge.gateway")
+PROBLEM_JSON = "application/problem+json"
+_TYPE_BASE = "https://burnedge.invalid/problems/"
+
+
+def _respond(problem: Problem, headers: dict[str, str] | None = None) -> Response:
+    return Response(content=problem, status_code=problem.status, media_type=PROBLEM_JSON, headers=headers)
+
+
+def burnedge_error(request: Request, exc: BurnedgeError) -> Response:
+    headers = {}
+    if isinstance(exc, TooManyAttempts):
+        headers["Retry-After"] = str(exc.retry_after_s)
+    if exc.status == 401:
+        headers["WWW-Authenticate"] = 'Bearer realm="burnedge"'
+    current = exc.current
+    if current is not None and getattr(current, "meta", None) is not None:
+        headers["ETag"] = f'"{current.meta.version}"'
+    problem = Problem(
+        type=_TYPE_BASE + exc.slug, title=exc.title, status=exc.status, detail=exc.detail,
+        instance=request.url.path, errors=exc.errors, current=current,
+    )  # fmt: skip
+    return _respond(problem, headers)
+
+
+def validation_error(request: Request, exc: ValidationException) -> Response:
+    """Body or parameter failed to decode: wrong type, unknown field, out of range, bad JSON."""
+    errors = []
+    for item in exc.extra if isinstance(exc.extra, list) else []:
+        if isinstance(item, dict):
+            key = item.get("key") or item.get("source") or "$"
+            errors.append(FieldProblem(field=str(key), message=str(item.get("message", ""))))
+    detail = "; ".join(f"{e.field}: {e.message}" for e in errors) or exc.detail
+    problem = Problem(
+        type=_TYPE_BASE + "validation", title="Request not valid", status=400,
+        detail=f"nothing was stored: {detail}", instance=request.url.path, errors=errors,
+    )  # fmt: skip
+    return _respond(problem)
+
+
+def http_error(request: Request, exc: HTTPException) -> Response:
+    problem = Problem(
+        type=_TYPE_BASE + f"http-{exc.status_code}", title=_title(exc.status_code), status=exc.status_code,
+        detail=str(exc.detail), instance=request.url.path,
+    )  # fmt: skip
+    return _respond(problem, exc.headers)
+
+
+def unexpected_error(request: Request, exc: Exception) -> Response:
+    log.exception("unhandled error on %s %s", request.method, request.url.path)
+    problem = Problem(
+        type=_TYPE_BASE + "internal-error", title="Internal error", status=500,
+        detail="the gateway hit an unexpected error; nothing partial was stored. The log has details.",
+        instance=request.url.path,
+    )  # fmt: skip
+    return _respond(problem)
+
+
+def _title(status: int) -> str:
+    try:
+        return HTTPStatus(status).phrase
+    except ValueError:
+        return "Error"
+
+
+EXCEPTION_HANDLERS = {
+    BurnedgeError: burnedge_error,
+    ValidationException: validation_error,
+    HTTPException: http_error,
+    Exception: unexpected_error,
+}

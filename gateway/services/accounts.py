@@ -1,0 +1,249 @@
+"""Users, login sessions, phone pairing and device tokens.
+
+Passwords are hashed with Argon2id (argon2-cffi). Session and device tokens are
+random 256-bit strings; only their SHA-256 is stored, so a copied database does not
+hand out working tokens.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import hashlib
+import secrets
+
+import argon2
+
+from gateway.services.permissions import Principal, require_admin
+from gateway.services.throttle import LoginThrottle
+from gateway.storage import audit
+from gateway.storage.database import Database
+from schemas.accounts import (
+    Device,
+    DeviceToken,
+    PairingCode,
+    PairingCodeRequest,
+    PairRequest,
+    Role,
+    Session,
+    User,
+    UserCreate,
+)
+from schemas.base import utcnow
+from schemas.config import SecurityConfig
+from schemas.errors import AuthenticationFailed, Conflict, NotFound
+from schemas.ids import uuid7
+
+_CODE_ALPHABET = "ABCDEFGHJKMNPQRSTVWXYZ23456789"  # no 0/O, 1/I/L: read aloud and typed on a phone
+
+
+def token_hash(token: str) -> str:
+    return hashlib.sha256(token.encode("utf-8")).hexdigest()
+
+
+def _iso(t: dt.datetime) -> str:
+    return t.isoformat(timespec="microseconds")
+
+
+def _user(row) -> User:
+    return User(
+        id=row["id"], username=row["username"], role=Role(row["role"]), display_name=row["display_name"],
+        active=bool(row["active"]), created_at=dt.datetime.fromisoformat(row["created_at"]),
+    )  # fmt: skip
+
+
+class AccountService:
+    def __init__(self, db: Database, config: SecurityConfig):
+        self.db = db
+        self.config = config
+        self.hasher = argon2.PasswordHasher(
+            time_cost=config.argon2_time_cost,
+            memory_cost=config.argon2_memory_kib,
+            parallelism=config.argon2_parallelism,
+        )
+        # Verifying against this keeps a login for an unknown user as slow as for a known one.
+        self._dummy_hash = self.hasher.hash(secrets.token_hex(16))
+        self.throttle = LoginThrottle(db, config)
+
+    # users ---------------------------------------------------------------
+    def create_user(self, actor: Principal | None, body: UserCreate) -> User:
+        """Create an account. actor None is the command line on the gateway itself."""
+        if actor is not None:
+            require_admin(actor, "manage_users")
+        password_hash = self.hasher.hash(body.password)
+        user_id = uuid7()
+        with self.db.write() as conn:
+            if conn.execute("SELECT 1 FROM users WHERE username = ?", (body.username,)).fetchone():
+                raise Conflict(f"the username {body.username!r} is taken")
+            conn.execute(
+                "INSERT INTO users (id, username, password_hash, role, display_name, active, created_at)"
+                " VALUES (?,?,?,?,?,1,?)",
+                (user_id, body.username, password_hash, body.role.value, body.display_name, _iso(utcnow())),
+            )
+            audit.append(
+                conn, action="user.create", user_id=actor.user_id if actor else None,
+                device_id=actor.device_id if actor else None, kind="user", record_id=user_id,
+                detail=f"{body.username} as {body.role.value}",
+            )  # fmt: skip
+            return _user(conn.execute("SELECT * FROM users WHERE id = ?", (user_id,)).fetchone())
+
+    def list_users(self, actor: Principal) -> list[User]:
+        require_admin(actor, "manage_users")
+        return [_user(r) for r in self.db.connection().execute("SELECT * FROM users ORDER BY username")]
+
+    # login ---------------------------------------------------------------
+    def login(self, username: str, password: str, *, client: str, device_token: str | None) -> Session:
+        keys = [f"user:{username.lower()}", f"client:{client}"]
+        self.throttle.check(keys)
+        row = self.db.connection().execute("SELECT * FROM users WHERE username = ?", (username,)).fetchone()
+        if not self._password_ok(row, password):
+            self.throttle.record_failure(keys, user_id=row["id"] if row else None, what=f"login as {username!r}")
+            raise AuthenticationFailed("wrong username or password")
+        if not row["active"]:
+            raise AuthenticationFailed("this account is disabled: ask an administrator")
+        device_id = self._device_for_token(device_token) if device_token else None
+        token = secrets.token_urlsafe(32)
+        now = utcnow()
+        expires = now + dt.timedelta(seconds=self.config.session_ttl_s)
+        with self.db.write() as conn:
+            if self.hasher.check_needs_rehash(row["password_hash"]):
+                conn.execute("UPDATE users SET password_hash = ? WHERE id = ?", (self.hasher.hash(password), row["id"]))
+            conn.execute(
+                "INSERT INTO sessions (token_hash, user_id, device_id, created_at, expires_at) VALUES (?,?,?,?,?)",
+                (token_hash(token), row["id"], device_id, _iso(now), _iso(expires)),
+            )
+            if device_id:
+                conn.execute("UPDATE devices SET last_seen_at = ? WHERE id = ?", (_iso(now), device_id))
+            self.throttle.clear(conn, keys[:1])  # the account, not the address: one good login must not reset a spray
+            audit.append(conn, action="auth.login", user_id=row["id"], device_id=device_id)
+        return Session(access_token=token, expires_at=expires, user=_user(row), device_id=device_id)
+
+    def _password_ok(self, row, password: str) -> bool:
+        try:
+            return self.hasher.verify(row["password_hash"] if row else self._dummy_hash, password) and row is not None
+        except argon2.exceptions.VerificationError:
+            return False
+        except argon2.exceptions.InvalidHashError:
+            return False
+
+    def _device_for_token(self, device_token: str) -> str:
+        row = (
+            self.db.connection()
+            .execute("SELECT id, revoked_at FROM devices WHERE token_hash = ?", (token_hash(device_token),))
+            .fetchone()
+        )
+        if row is None:
+            raise AuthenticationFailed("unknown device token: pair this phone again")
+        if row["revoked_at"]:
+            raise AuthenticationFailed("this phone's pairing was revoked: ask an administrator to pair it again")
+        return row["id"]
+
+    def authenticate(self, bearer: str) -> Principal:
+        """Resolve a session token. Checked on every request, so revocation acts at once."""
+        th = token_hash(bearer)
+        row = (
+            self.db.connection()
+            .execute(
+                "SELECT s.user_id, s.device_id, s.expires_at, s.revoked_at, u.username, u.role, u.active,"
+                " d.revoked_at AS device_revoked_at FROM sessions s JOIN users u ON u.id = s.user_id"
+                " LEFT JOIN devices d ON d.id = s.device_id WHERE s.token_hash = ?",
+                (th,),
+            )
+            .fetchone()
+        )
+        if row is None or row["revoked_at"] or not row["active"]:
+            raise AuthenticationFailed("session unknown or ended: log in again")
+        if row["device_revoked_at"]:
+            raise AuthenticationFailed("this phone's pairing was revoked: ask an administrator to pair it again")
+        if dt.datetime.fromisoformat(row["expires_at"]) <= utcnow():
+            raise AuthenticationFailed("session expired: log in again")
+        return Principal(row["user_id"], row["username"], Role(row["role"]), row["device_id"], th)
+
+    def logout(self, principal: Principal) -> None:
+        with self.db.write() as conn:
+            conn.execute(
+                "UPDATE sessions SET revoked_at = ? WHERE token_hash = ?", (_iso(utcnow()), principal.session_hash)
+            )
+            audit.append(conn, action="auth.logout", user_id=principal.user_id, device_id=principal.device_id)
+
+    # pairing and devices -------------------------------------------------------
+    def create_pairing_code(self, actor: Principal, body: PairingCodeRequest) -> PairingCode:
+        require_admin(actor, "manage_devices")
+        raw = "".join(secrets.choice(_CODE_ALPHABET) for _ in range(8))
+        code = f"{raw[:4]}-{raw[4:]}"
+        now = utcnow()
+        expires = now + dt.timedelta(seconds=self.config.pairing_code_ttl_s)
+        with self.db.write() as conn:
+            conn.execute(
+                "INSERT INTO pairing_codes (code_hash, device_name, created_by, created_at, expires_at) VALUES (?,?,?,?,?)",
+                (token_hash(raw), body.device_name, actor.user_id, _iso(now), _iso(expires)),
+            )
+            audit.append(conn, action="device.pairing_code", user_id=actor.user_id, device_id=actor.device_id,
+                         detail=body.device_name)  # fmt: skip
+        return PairingCode(code=code, device_name=body.device_name, expires_at=expires)
+
+    def pair(self, body: PairRequest, *, client: str) -> DeviceToken:
+        keys = [f"pair:{client}"]
+        self.throttle.check(keys)
+        normalized = body.code.upper().replace("-", "").replace(" ", "")
+        now = utcnow()
+        with self.db.write() as conn:
+            row = conn.execute("SELECT * FROM pairing_codes WHERE code_hash = ?", (token_hash(normalized),)).fetchone()
+            problem = None
+            if row is None:
+                problem = "pairing code not recognised: check it, or ask for a new one"
+            elif row["used_at"]:
+                problem = "this pairing code was already used: ask for a new one"
+            elif dt.datetime.fromisoformat(row["expires_at"]) <= now:
+                problem = "this pairing code has expired: ask for a new one"
+            if problem is None:
+                token = secrets.token_urlsafe(32)
+                device_id = uuid7()
+                conn.execute("UPDATE pairing_codes SET used_at = ? WHERE code_hash = ?", (_iso(now), row["code_hash"]))
+                conn.execute(
+                    "INSERT INTO devices (id, name, fingerprint, token_hash, paired_at, paired_by) VALUES (?,?,?,?,?,?)",
+                    (
+                        device_id,
+                        row["device_name"],
+                        body.device_fingerprint,
+                        token_hash(token),
+                        _iso(now),
+                        row["created_by"],
+                    ),
+                )
+                audit.append(conn, action="device.pair", user_id=row["created_by"], device_id=device_id,
+                             kind="device", record_id=device_id, detail=row["device_name"])  # fmt: skip
+        if problem is not None:
+            self.throttle.record_failure(keys, user_id=None, what="pairing")
+            raise AuthenticationFailed(problem)
+        return DeviceToken(device_id=device_id, device_token=token)
+
+    def list_devices(self, actor: Principal) -> list[Device]:
+        require_admin(actor, "manage_devices")
+        rows = self.db.connection().execute("SELECT * FROM devices ORDER BY paired_at")
+        return [_device(r) for r in rows]
+
+    def revoke_device(self, actor: Principal, device_id: str) -> Device:
+        require_admin(actor, "manage_devices")
+        now = _iso(utcnow())
+        with self.db.write() as conn:
+            row = conn.execute("SELECT * FROM devices WHERE id = ?", (device_id,)).fetchone()
+            if row is None:
+                raise NotFound(f"no device with id {device_id}")
+            if not row["revoked_at"]:
+                conn.execute("UPDATE devices SET revoked_at = ? WHERE id = ?", (now, device_id))
+                conn.execute(
+                    "UPDATE sessions SET revoked_at = ? WHERE device_id = ? AND revoked_at IS NULL", (now, device_id)
+                )
+                audit.append(conn, action="device.revoke", user_id=actor.user_id, device_id=actor.device_id,
+                             kind="device", record_id=device_id, detail=row["name"])  # fmt: skip
+            return _device(conn.execute("SELECT * FROM devices WHERE id = ?", (device_id,)).fetchone())
+
+
+def _device(row) -> Device:
+    def t(value):
+        return dt.datetime.fromisoformat(value) if value else None
+
+    return Device(
+        id=row["id"], name=row["name"], fingerprint=row["fingerprint"], paired_at=t(row["paired_at"]),
+        paired_by=row["paired_by"], revoked_at=t(row["revoked_at"]), last_seen_at=t(row["last_seen_at"]),
+    )  # fmt: skip

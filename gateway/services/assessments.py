@@ -1,0 +1,58 @@
+"""Runs the clinical calculators server-side and stores their results with their inputs."""
+
+from __future__ import annotations
+
+import sqlite3
+
+import msgspec
+
+from gateway.services.permissions import Principal
+from gateway.storage import audit
+from gateway.storage import records as rows
+from processing.clinical.assessment import assess
+from schemas.base import utcnow
+from schemas.clinical_results import InputRef
+from schemas.config import Config
+from schemas.records import ENCOUNTER_PARTS, RECORD_TYPES, Record, RecordKind
+
+_INPUT_PARTS = ENCOUNTER_PARTS - {RecordKind.assessment}
+
+
+def _struct(record: Record):
+    return msgspec.convert(record.data, RECORD_TYPES[record.meta.kind])
+
+
+def refresh_assessments(
+    conn: sqlite3.Connection, principal: Principal, encounter_ids: list[str], config: Config
+) -> None:
+    """Recompute and store each encounter's Assessment as of now. Inside the caller's transaction."""
+    for encounter_id in encounter_ids:
+        encounter = rows.find_head(conn, RecordKind.encounter, encounter_id)
+        if encounter is None or encounter.meta.deleted:
+            continue
+        patient = rows.get_head(conn, RecordKind.patient, encounter.data["patient_id"])
+        parts = {
+            k: r for k, r in rows.heads_of_children(conn, encounter_id, _INPUT_PARTS).items() if not r.meta.deleted
+        }
+        used = [patient, encounter, *parts.values()]
+        now = utcnow()
+        result = assess(
+            patient=_struct(patient),
+            encounter=_struct(encounter),
+            parts={kind: _struct(r) for kind, r in parts.items()},
+            inputs=[InputRef(kind=r.meta.kind.value, id=r.meta.id, version=r.meta.version) for r in used],
+            as_of=now,
+            config=config.clinical,
+            computed_at=now,
+        )
+        current = rows.find_head(conn, RecordKind.assessment, encounter_id)
+        version = current.meta.version + 1 if current else 1
+        rows.insert_version(
+            conn, kind=RecordKind.assessment, record_id=encounter_id, version=version, parent_id=encounter_id,
+            data_json=msgspec.json.encode(result),
+            created_at=current.meta.created_at.isoformat(timespec="microseconds") if current else None,
+            updated_by=principal.username, device_id=principal.device_id,
+        )  # fmt: skip
+        audit.append(conn, action="assessment.compute", user_id=principal.user_id, device_id=principal.device_id,
+                     kind=RecordKind.assessment.value, record_id=encounter_id,
+                     before_version=current.meta.version if current else None, after_version=version)  # fmt: skip

@@ -1,0 +1,70 @@
+"""Who may do what: one table per role, checked by the services (never by controllers alone)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from schemas.accounts import Role
+from schemas.errors import Forbidden
+from schemas.records import RecordKind
+
+ALL_KINDS = frozenset(RecordKind)
+CLIENT_WRITABLE = ALL_KINDS - {RecordKind.assessment}
+
+READ: dict[Role, frozenset[RecordKind]] = {
+    Role.clinician: ALL_KINDS,
+    Role.nurse: ALL_KINDS,
+    Role.consultant: ALL_KINDS,
+    # Administrators run the box; they do not read patients' records.
+    Role.admin: frozenset(),
+}
+WRITE: dict[Role, frozenset[RecordKind]] = {
+    Role.clinician: CLIENT_WRITABLE,
+    # The burn chart drives %TBSA, fluids and referral: a clinician's assessment.
+    Role.nurse: CLIENT_WRITABLE - {RecordKind.burn_chart},
+    # Consultants advise through consultations (their own channel), not by editing the record.
+    Role.consultant: frozenset(),
+    Role.admin: frozenset(),
+}
+DELETE: dict[Role, frozenset[RecordKind]] = {
+    Role.clinician: CLIENT_WRITABLE,
+    Role.nurse: frozenset(),
+    Role.consultant: frozenset(),
+    Role.admin: frozenset(),
+}
+ADMIN_ONLY = frozenset({"manage_users", "manage_devices", "read_audit"})
+
+
+@dataclass(frozen=True, slots=True)
+class Principal:
+    """The authenticated caller of one request."""
+
+    user_id: str
+    username: str
+    role: Role
+    device_id: str | None
+    session_hash: str
+
+
+def readable_kinds(principal: Principal) -> frozenset[RecordKind]:
+    return READ[principal.role]
+
+
+def require_read(principal: Principal, kind: RecordKind) -> None:
+    if kind not in READ[principal.role]:
+        raise Forbidden(f"a {principal.role.value} may not read {kind.value.replace('_', ' ')} records")
+
+
+def require_write(principal: Principal, kind: RecordKind) -> None:
+    if kind not in WRITE[principal.role]:
+        raise Forbidden(f"a {principal.role.value} may not write {kind.value.replace('_', ' ')} records")
+
+
+def require_delete(principal: Principal, kind: RecordKind) -> None:
+    if kind not in DELETE[principal.role]:
+        raise Forbidden(f"a {principal.role.value} may not withdraw {kind.value.replace('_', ' ')} records")
+
+
+def require_admin(principal: Principal, action: str) -> None:
+    if action not in ADMIN_ONLY or principal.role is not Role.admin:
+        raise Forbidden(f"only an administrator may {action.replace('_', ' ')}")

@@ -1,0 +1,96 @@
+"""Checks a record must pass before it is stored: schema, identity, references, clinical times."""
+
+from __future__ import annotations
+
+import datetime as dt
+import re
+import sqlite3
+
+import msgspec
+
+from gateway.storage import records as rows
+from schemas.base import utcnow
+from schemas.burn_chart import BurnChart
+from schemas.config import Config
+from schemas.errors import InvalidInput, NotFound
+from schemas.patient import Encounter, Patient
+from schemas.problem import FieldProblem
+from schemas.record_parts import PrimarySurvey, Resuscitation, SecondarySurvey
+from schemas.records import RECORD_TYPES, RecordKind
+
+_AT_PATH = re.compile(r"^(?P<msg>.*?)(?: - at `(?P<path>[^`]*)`)?$", re.S)
+
+
+def field_problem(exc: msgspec.ValidationError) -> FieldProblem:
+    """Split msgspec's "Expected `int`, got `str` - at `$.weight_kg`" into path and message."""
+    m = _AT_PATH.match(str(exc))
+    return FieldProblem(field=m["path"] or "$", message=m["msg"])
+
+
+def to_struct(kind: RecordKind, data: object) -> msgspec.Struct:
+    struct_type = RECORD_TYPES[kind]
+    if isinstance(data, struct_type):
+        return data
+    if not isinstance(data, dict):
+        raise InvalidInput(f"{kind.value} data must be a JSON object")
+    try:
+        return msgspec.convert(data, struct_type)
+    except msgspec.ValidationError as exc:
+        problem = field_problem(exc)
+        raise InvalidInput(f"{kind.value}: {problem.message} at {problem.field}", errors=[problem]) from exc
+
+
+def _bad(field: str, message: str) -> InvalidInput:
+    return InvalidInput(f"{message} ({field})", errors=[FieldProblem(field=field, message=message)])
+
+
+def _not_future(value: dt.datetime | None, field: str, config: Config) -> None:
+    if value is not None and value > utcnow() + dt.timedelta(seconds=config.gateway.clock_skew_s):
+        raise _bad(field, f"{value.isoformat()} is in the future: check the phone's clock and the time entered")
+
+
+def check(conn: sqlite3.Connection, kind: RecordKind, record_id: str, struct, config: Config) -> str | None:
+    """Raise InvalidInput/NotFound if the record cannot be stored; return its parent id."""
+    if kind is RecordKind.patient:
+        _check_patient(record_id, struct)
+        return None
+    if kind is RecordKind.encounter:
+        _check_encounter(conn, record_id, struct, config)
+        return struct.patient_id
+    if struct.encounter_id != record_id:
+        raise _bad(
+            "$.encounter_id",
+            f"encounter_id {struct.encounter_id} does not match the encounter {record_id} in the address",
+        )
+    _require_live(conn, RecordKind.encounter, record_id)
+    if isinstance(struct, (PrimarySurvey, SecondarySurvey, BurnChart)):
+        _not_future(struct.assessed_at, "$.assessed_at", config)
+    if isinstance(struct, Resuscitation):
+        for i, given in enumerate(struct.fluid_given):
+            _not_future(given.given_at, f"$.fluid_given[{i}].given_at", config)
+    return record_id
+
+
+def _check_patient(record_id: str, patient: Patient) -> None:
+    if patient.id != record_id:
+        raise _bad("$.id", f"id {patient.id} does not match {record_id} in the address")
+    if patient.date_of_birth is not None and patient.date_of_birth > utcnow().date():
+        raise _bad("$.date_of_birth", "date of birth is in the future")
+
+
+def _check_encounter(conn: sqlite3.Connection, record_id: str, enc: Encounter, config: Config) -> None:
+    if enc.id != record_id:
+        raise _bad("$.id", f"id {enc.id} does not match {record_id} in the address")
+    _require_live(conn, RecordKind.patient, enc.patient_id)
+    _not_future(enc.time_of_arrival, "$.time_of_arrival", config)
+    _not_future(enc.time_of_injury, "$.time_of_injury", config)
+    if enc.time_of_injury is not None and enc.time_of_injury > enc.time_of_arrival:
+        raise _bad("$.time_of_injury", "the time of injury is after the time of arrival")
+
+
+def _require_live(conn: sqlite3.Connection, kind: RecordKind, record_id: str) -> None:
+    head = rows.find_head(conn, kind, record_id)
+    if head is None:
+        raise NotFound(f"no {kind.value} with id {record_id}: create it first")
+    if head.meta.deleted:
+        raise InvalidInput(f"the {kind.value} {record_id} was withdrawn: records cannot be added to it")

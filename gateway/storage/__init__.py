@@ -1,0 +1,1 @@
+"""SQLite storage: one database file in WAL mode, migrated with sqlite-utils."""

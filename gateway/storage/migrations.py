@@ -1,0 +1,135 @@
+"""Schema migrations, applied in order and recorded by sqlite-utils.
+
+Never edit a released migration: add a new one.
+"""
+
+from __future__ import annotations
+
+from sqlite_utils import Database, Migrations
+
+migrations = Migrations("burnedge")
+
+
+@migrations()
+def m001_records(db: Database) -> None:
+    db.execute(
+        """
+        CREATE TABLE record_versions (
+            seq INTEGER PRIMARY KEY AUTOINCREMENT,
+            kind TEXT NOT NULL,
+            id TEXT NOT NULL,
+            version INTEGER NOT NULL,
+            parent_id TEXT,
+            data TEXT NOT NULL,
+            deleted INTEGER NOT NULL DEFAULT 0,
+            delete_reason TEXT,
+            created_at TEXT NOT NULL,
+            updated_at TEXT NOT NULL,
+            updated_by TEXT NOT NULL,
+            device_id TEXT,
+            UNIQUE (kind, id, version)
+        )"""
+    )
+    # The current version of each record; the change feed reads record_versions by seq.
+    db.execute(
+        """
+        CREATE TABLE record_heads (
+            kind TEXT NOT NULL,
+            id TEXT NOT NULL,
+            seq INTEGER NOT NULL REFERENCES record_versions(seq),
+            parent_id TEXT,
+            deleted INTEGER NOT NULL DEFAULT 0,
+            PRIMARY KEY (kind, id)
+        ) WITHOUT ROWID"""
+    )
+    db.execute("CREATE INDEX record_heads_parent ON record_heads (parent_id, kind)")
+    db.execute(
+        """
+        CREATE TABLE applied_mutations (
+            mutation_id TEXT PRIMARY KEY,
+            result TEXT NOT NULL,
+            applied_at TEXT NOT NULL,
+            user_id TEXT
+        ) WITHOUT ROWID"""
+    )
+
+
+@migrations()
+def m002_accounts(db: Database) -> None:
+    db.execute(
+        """
+        CREATE TABLE users (
+            id TEXT PRIMARY KEY,
+            username TEXT NOT NULL UNIQUE,
+            password_hash TEXT NOT NULL,
+            role TEXT NOT NULL,
+            display_name TEXT NOT NULL DEFAULT '',
+            active INTEGER NOT NULL DEFAULT 1,
+            created_at TEXT NOT NULL
+        )"""
+    )
+    db.execute(
+        """
+        CREATE TABLE devices (
+            id TEXT PRIMARY KEY,
+            name TEXT NOT NULL,
+            fingerprint TEXT NOT NULL DEFAULT '',
+            token_hash TEXT NOT NULL UNIQUE,
+            paired_at TEXT NOT NULL,
+            paired_by TEXT NOT NULL,
+            revoked_at TEXT,
+            last_seen_at TEXT
+        )"""
+    )
+    db.execute(
+        """
+        CREATE TABLE pairing_codes (
+            code_hash TEXT PRIMARY KEY,
+            device_name TEXT NOT NULL,
+            created_by TEXT NOT NULL,
+            created_at TEXT NOT NULL,
+            expires_at TEXT NOT NULL,
+            used_at TEXT
+        )"""
+    )
+    db.execute(
+        """
+        CREATE TABLE sessions (
+            token_hash TEXT PRIMARY KEY,
+            user_id TEXT NOT NULL REFERENCES users(id),
+            device_id TEXT REFERENCES devices(id),
+            created_at TEXT NOT NULL,
+            expires_at TEXT NOT NULL,
+            revoked_at TEXT
+        )"""
+    )
+    db.execute(
+        """
+        CREATE TABLE login_throttle (
+            key TEXT PRIMARY KEY,
+            failures INTEGER NOT NULL,
+            window_start TEXT NOT NULL,
+            locked_until TEXT
+        ) WITHOUT ROWID"""
+    )
+
+
+@migrations()
+def m003_audit(db: Database) -> None:
+    db.execute(
+        """
+        CREATE TABLE audit_log (
+            seq INTEGER PRIMARY KEY,
+            at TEXT NOT NULL,
+            user_id TEXT,
+            device_id TEXT,
+            action TEXT NOT NULL,
+            kind TEXT,
+            record_id TEXT,
+            before_version INTEGER,
+            after_version INTEGER,
+            detail TEXT NOT NULL DEFAULT '',
+            prev_hash TEXT NOT NULL,
+            hash TEXT NOT NULL
+        )"""
+    )

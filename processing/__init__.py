@@ -1,0 +1,1 @@
+"""Server-side processing: clinical calculators and other pure computations on records."""

@@ -1,0 +1,82 @@
+"""Users, roles, sessions and paired devices."""
+
+from __future__ import annotations
+
+import enum
+from typing import Annotated
+
+import msgspec
+
+from schemas.base import Frozen, Message, ShortText, Timestamp
+
+Username = Annotated[str, msgspec.Meta(pattern=r"^[a-z0-9][a-z0-9._-]{1,63}$")]
+Password = Annotated[str, msgspec.Meta(min_length=10, max_length=256)]
+
+
+class Role(enum.StrEnum):
+    clinician = "clinician"
+    nurse = "nurse"
+    admin = "admin"
+    consultant = "consultant"
+
+
+class UserCreate(Message):
+    username: Username
+    password: Password
+    role: Role
+    display_name: ShortText = ""
+
+
+class User(Frozen):
+    id: str
+    username: str
+    role: Role
+    display_name: str
+    active: bool
+    created_at: Timestamp
+
+
+class LoginRequest(Message):
+    username: Annotated[str, msgspec.Meta(max_length=64)]
+    password: Annotated[str, msgspec.Meta(max_length=256)]
+
+
+class Session(Frozen):
+    access_token: str
+    """Send as "Authorization: Bearer <token>"."""
+    expires_at: Timestamp
+    user: User
+    device_id: str | None
+
+
+class PairingCodeRequest(Message):
+    device_name: ShortText
+    """What the phone will be called in the device list, e.g. "ward 2 phone"."""
+
+
+class PairingCode(Frozen):
+    code: str
+    device_name: str
+    expires_at: Timestamp
+
+
+class PairRequest(Message):
+    code: Annotated[str, msgspec.Meta(max_length=32)]
+    device_fingerprint: ShortText = ""
+    """Phone-side identifier (hardware or install ID) recorded with the device."""
+
+
+class DeviceToken(Frozen):
+    device_id: str
+    device_token: str
+    """Send as "X-Device-Token" when logging in from this phone; shown once."""
+
+
+class Device(Frozen):
+    id: str
+    name: str
+    fingerprint: str
+    paired_at: Timestamp
+    paired_by: str
+    revoked_at: Timestamp | None
+    last_seen_at: Timestamp | None

@@ -1,0 +1,28 @@
+"""Audit trail entries: hash-chained so that editing or removing a past entry is detectable."""
+
+from __future__ import annotations
+
+from schemas.base import Frozen
+
+
+class AuditEntry(Frozen):
+    seq: int
+    at: str
+    """UTC time, ISO 8601, as hashed."""
+    user_id: str | None
+    device_id: str | None
+    action: str
+    kind: str | None
+    record_id: str | None
+    before_version: int | None
+    after_version: int | None
+    detail: str
+    prev_hash: str
+    hash: str
+
+
+class AuditVerification(Frozen):
+    ok: bool
+    entries: int
+    first_broken_seq: int | None
+    reason: str

@@ -1,0 +1,44 @@
+"""Shared building blocks: the base Struct, identifiers, timestamps and bounded numbers."""
+
+from __future__ import annotations
+
+import datetime as dt
+from typing import Annotated
+
+import msgspec
+
+# Client-generated identifiers: a UUID in canonical text form (UUIDv7 preferred, any
+# version accepted so existing phone libraries work) or a ULID.
+ID_PATTERN = (
+    r"^([0-9a-f]{8}-[0-9a-f]{4}-[0-9a-f]{4}-[0-9a-f]{4}-[0-9a-f]{12}"
+    r"|[0-9A-HJKMNP-TV-Z]{26})$"
+)
+Id = Annotated[
+    str,
+    msgspec.Meta(
+        pattern=ID_PATTERN,
+        description="Client-generated identifier: UUID (v7 preferred, lower-case) or ULID.",
+        examples=["0192f3b4-6a8e-7c3d-9b1a-2f4e5d6c7b8a"],
+    ),
+]
+# Timestamps must carry a UTC offset: a clinical time without one is ambiguous.
+Timestamp = Annotated[dt.datetime, msgspec.Meta(tz=True, description="ISO 8601 with offset.")]
+ShortText = Annotated[str, msgspec.Meta(max_length=200)]
+LongText = Annotated[str, msgspec.Meta(max_length=20_000)]
+Fraction = Annotated[float, msgspec.Meta(ge=0.0, le=1.0, description="0 to 1.")]
+Percent = Annotated[float, msgspec.Meta(ge=0.0, le=100.0)]
+WeightKg = Annotated[float, msgspec.Meta(gt=0.0, le=400.0, description="Body weight in kg.")]
+HeightCm = Annotated[float, msgspec.Meta(ge=20.0, le=272.0, description="Body height in cm.")]
+Millilitres = Annotated[float, msgspec.Meta(ge=0.0, le=100_000.0)]
+
+
+class Message(msgspec.Struct, kw_only=True, forbid_unknown_fields=True, omit_defaults=False):
+    """Base of every message: unknown fields are an error, never silently dropped."""
+
+
+class Frozen(Message, frozen=True):
+    """Immutable message (results and envelopes)."""
+
+
+def utcnow() -> dt.datetime:
+    return dt.datetime.now(dt.UTC)

@@ -1,0 +1,100 @@
+"""The burn chart: Lund-Browder regions, each with the fraction burned and its depth."""
+
+from __future__ import annotations
+
+import enum
+
+from schemas.base import Fraction, Id, Message, Timestamp
+
+
+class BurnDepth(enum.StrEnum):
+    """Clinical burn-depth category, as judged by the clinician.
+
+    Never derived from 3D geometry: measured "surface relief" is a different thing.
+    """
+
+    superficial = "superficial"
+    """Epidermal only; excluded from %TBSA."""
+    superficial_partial = "superficial_partial"
+    deep_partial = "deep_partial"
+    full_thickness = "full_thickness"
+
+
+class LundBrowderRegion(enum.StrEnum):
+    """Regions of the Lund-Browder chart, split front/back as on the printed chart."""
+
+    head_anterior = "head_anterior"
+    head_posterior = "head_posterior"
+    neck_anterior = "neck_anterior"
+    neck_posterior = "neck_posterior"
+    trunk_anterior = "trunk_anterior"
+    trunk_posterior = "trunk_posterior"
+    buttock_right = "buttock_right"
+    buttock_left = "buttock_left"
+    genitalia = "genitalia"
+    upper_arm_right_anterior = "upper_arm_right_anterior"
+    upper_arm_right_posterior = "upper_arm_right_posterior"
+    upper_arm_left_anterior = "upper_arm_left_anterior"
+    upper_arm_left_posterior = "upper_arm_left_posterior"
+    lower_arm_right_anterior = "lower_arm_right_anterior"
+    lower_arm_right_posterior = "lower_arm_right_posterior"
+    lower_arm_left_anterior = "lower_arm_left_anterior"
+    lower_arm_left_posterior = "lower_arm_left_posterior"
+    hand_right_palmar = "hand_right_palmar"
+    hand_right_dorsal = "hand_right_dorsal"
+    hand_left_palmar = "hand_left_palmar"
+    hand_left_dorsal = "hand_left_dorsal"
+    thigh_right_anterior = "thigh_right_anterior"
+    thigh_right_posterior = "thigh_right_posterior"
+    thigh_left_anterior = "thigh_left_anterior"
+    thigh_left_posterior = "thigh_left_posterior"
+    lower_leg_right_anterior = "lower_leg_right_anterior"
+    lower_leg_right_posterior = "lower_leg_right_posterior"
+    lower_leg_left_anterior = "lower_leg_left_anterior"
+    lower_leg_left_posterior = "lower_leg_left_posterior"
+    foot_right_dorsal = "foot_right_dorsal"
+    foot_right_plantar = "foot_right_plantar"
+    foot_left_dorsal = "foot_left_dorsal"
+    foot_left_plantar = "foot_left_plantar"
+
+
+class SpecialArea(enum.StrEnum):
+    """Functionally or cosmetically critical areas named by the referral criteria."""
+
+    face = "face"
+    hands = "hands"
+    feet = "feet"
+    genitalia = "genitalia"
+    perineum = "perineum"
+    major_joint = "major_joint"
+
+
+class BurnChartEntry(Message):
+    region: LundBrowderRegion
+    fraction: Fraction
+    """Share of this region that is burned at this depth (0 to 1)."""
+    depth: BurnDepth
+    circumferential: bool = False
+
+
+class SpecialAreaInvolvement(Message):
+    area: SpecialArea
+    depth: BurnDepth
+
+
+class AgeAdjustment(enum.StrEnum):
+    band = "band"
+    """Step: use the chart column of the age band the patient falls in (as on the printed chart)."""
+    interpolate = "interpolate"
+    """Linear between the chart's column ages (0, 1, 5, 10, 15, adult taken as 18)."""
+
+
+class BurnChart(Message):
+    """One clinician's charting of an encounter's burns. A region may appear once per depth."""
+
+    encounter_id: Id
+    assessed_at: Timestamp
+    entries: list[BurnChartEntry] = []
+    special_areas: list[SpecialAreaInvolvement] = []
+    """Critical areas the regions alone cannot show (face, perineum, joints)."""
+    age_adjustment: AgeAdjustment = AgeAdjustment.band

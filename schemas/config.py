@@ -1,0 +1,98 @@
+"""Typed configuration: every setting burnedge reads, in one place, each documented.
+
+Loaded from a TOML file (`burnedge --config FILE`), then overridden by environment
+variables named BURNEDGE_<SECTION>_<FIELD> (e.g. BURNEDGE_GATEWAY_PORT=8443), then
+by command-line flags.
+"""
+
+from __future__ import annotations
+
+import os
+import tomllib
+from pathlib import Path
+from typing import Annotated, Literal
+
+import msgspec
+
+from schemas.base import Message
+from schemas.errors import InvalidInput
+
+
+class GatewayConfig(Message):
+    host: str = "127.0.0.1"
+    """Address to listen on. Use 0.0.0.0 to let phones on the clinic network connect."""
+    port: Annotated[int, msgspec.Meta(ge=1, le=65535)] = 8080
+    """TCP port of the HTTP API."""
+    database: str = "burnedge.sqlite3"
+    """Path of the SQLite database file (created if missing)."""
+    sqlite_synchronous: Literal["FULL", "NORMAL"] = "FULL"
+    """FULL survives power cuts without losing a committed write; NORMAL is faster and may lose the last commits."""
+    busy_timeout_ms: Annotated[int, msgspec.Meta(ge=0)] = 10_000
+    """How long a writer waits for another writer before reporting storage busy."""
+    changes_page_max: Annotated[int, msgspec.Meta(ge=1)] = 500
+    """Largest change-feed page a client may ask for."""
+    clock_skew_s: Annotated[int, msgspec.Meta(ge=0)] = 300
+    """Tolerance for clinical times slightly in the future (phone clocks drift)."""
+
+
+class SecurityConfig(Message):
+    session_ttl_s: Annotated[int, msgspec.Meta(ge=60)] = 12 * 3600
+    """Lifetime of a login session (one clinical shift by default)."""
+    pairing_code_ttl_s: Annotated[int, msgspec.Meta(ge=30)] = 600
+    """How long an unused one-time pairing code stays valid."""
+    argon2_time_cost: Annotated[int, msgspec.Meta(ge=1)] = 3
+    """Argon2id iterations."""
+    argon2_memory_kib: Annotated[int, msgspec.Meta(ge=8)] = 65_536
+    """Argon2id memory per hash in KiB (64 MiB: memory-hard yet fine on a 2-core mini-PC)."""
+    argon2_parallelism: Annotated[int, msgspec.Meta(ge=1)] = 2
+    """Argon2id lanes."""
+    login_free_failures: Annotated[int, msgspec.Meta(ge=1)] = 5
+    """Failed logins allowed per account or address in the window before slowing down."""
+    login_failure_window_s: Annotated[int, msgspec.Meta(ge=1)] = 900
+    """Window in which failed logins are counted."""
+    login_base_delay_s: Annotated[int, msgspec.Meta(ge=1)] = 2
+    """First lock-out after the free failures; doubles with each further failure."""
+    login_max_delay_s: Annotated[int, msgspec.Meta(ge=1)] = 900
+    """Longest lock-out."""
+
+
+class ClinicalConfig(Message):
+    child_max_age_years: float = 14.0
+    """Patients at or below this age are children for fluids and referral (ABA/ABLS pediatric)."""
+    child_max_weight_kg: float = 30.0
+    """Patients below this weight are treated as children too (ABA 2022: <30 kg)."""
+    formal_resuscitation_adult_percent: float = 20.0
+    """%TBSA from which an adult needs formal fluid resuscitation (ABLS)."""
+    formal_resuscitation_child_percent: float = 10.0
+    """%TBSA from which a child needs formal fluid resuscitation (ABLS)."""
+
+
+class Config(Message):
+    gateway: GatewayConfig = msgspec.field(default_factory=GatewayConfig)
+    """The HTTP gateway and its database."""
+    security: SecurityConfig = msgspec.field(default_factory=SecurityConfig)
+    """Sessions, pairing and password hashing."""
+    clinical: ClinicalConfig = msgspec.field(default_factory=ClinicalConfig)
+    """Thresholds used by the clinical calculators."""
+
+
+def load_config(path: str | Path | None = None, environ: dict[str, str] | None = None) -> Config:
+    """Read a TOML file (optional), apply BURNEDGE_* environment overrides, validate."""
+    raw: dict = {}
+    if path is not None:
+        try:
+            raw = tomllib.loads(Path(path).read_text())
+        except FileNotFoundError as exc:
+            raise InvalidInput(f"config file {path} does not exist") from exc
+        except tomllib.TOMLDecodeError as exc:
+            raise InvalidInput(f"config file {path} is not valid TOML: {exc}") from exc
+    env = os.environ if environ is None else environ
+    for section, struct in (("gateway", GatewayConfig), ("security", SecurityConfig), ("clinical", ClinicalConfig)):
+        for field in struct.__struct_fields__:
+            value = env.get(f"BURNEDGE_{section}_{field}".upper())
+            if value is not None:
+                raw.setdefault(section, {})[field] = value
+    try:
+        return msgspec.convert(raw, Config, strict=False)
+    except msgspec.ValidationError as exc:
+        raise InvalidInput(f"configuration is invalid: {exc}") from exc

@@ -1,0 +1,99 @@
+"""The error hierarchy shared by every package.
+
+Library code raises these; the gateway maps them to problem+json and the CLI to exit
+codes, each in one place (gateway/errors.py, gateway/cli.py). They live beside the
+schemas because every other package already depends on this one.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from schemas.problem import FieldProblem
+
+
+class BurnedgeError(Exception):
+    """Base class. `status` is the HTTP status, `slug` names the problem type."""
+
+    status = 500
+    slug = "internal-error"
+    title = "Internal error"
+
+    def __init__(self, detail: str, *, errors: list[FieldProblem] | None = None, current: Any = None):
+        super().__init__(detail)
+        self.detail = detail
+        self.errors = errors or []
+        self.current = current
+
+
+class InvalidInput(BurnedgeError):
+    """The input is impossible or inconsistent (e.g. weight 0 kg, injury time in the future)."""
+
+    status = 422
+    slug = "invalid-input"
+    title = "Invalid input"
+
+
+class MissingData(InvalidInput):
+    """A calculation needs data the record does not hold yet."""
+
+    slug = "missing-data"
+    title = "Missing data"
+
+
+class NotFound(BurnedgeError):
+    status = 404
+    slug = "not-found"
+    title = "Not found"
+
+
+class Conflict(BurnedgeError):
+    """The write clashes with what is stored (duplicate id with other content, deleted record)."""
+
+    status = 409
+    slug = "conflict"
+    title = "Conflict"
+
+
+class VersionMismatch(Conflict):
+    """Optimistic concurrency: the client edited a version that is no longer current."""
+
+    status = 412
+    slug = "version-mismatch"
+    title = "Precondition failed: the record has changed"
+
+
+class PreconditionRequired(BurnedgeError):
+    status = 428
+    slug = "precondition-required"
+    title = "If-Match required"
+
+
+class AuthenticationFailed(BurnedgeError):
+    status = 401
+    slug = "unauthenticated"
+    title = "Authentication required"
+
+
+class Forbidden(BurnedgeError):
+    status = 403
+    slug = "forbidden"
+    title = "Not allowed for this role"
+
+
+class TooManyAttempts(BurnedgeError):
+    status = 429
+    slug = "too-many-attempts"
+    title = "Too many failed attempts"
+
+    def __init__(self, detail: str, *, retry_after_s: int):
+        super().__init__(detail)
+        self.retry_after_s = retry_after_s
+
+
+class StorageError(BurnedgeError):
+    """The database is unusable (corrupt, wrong schema, locked beyond the timeout)."""
+
+    status = 503
+    slug = "storage-unavailable"
+    title = "Storage unavailable"

@@ -1,0 +1,43 @@
+"""Writes JSON Schema for every public message, so a phone team can generate its client."""
+
+from __future__ import annotations
+
+import importlib
+import json
+import pkgutil
+from pathlib import Path
+
+import msgspec
+
+import schemas
+from schemas.base import Frozen, Message
+
+_SKIP_MODULES = {"schemas.export", "schemas.config"}
+
+
+def public_messages() -> list[type[msgspec.Struct]]:
+    """Every Struct defined in the schemas package, except the two abstract bases."""
+    found: dict[str, type[msgspec.Struct]] = {}
+    for info in pkgutil.iter_modules(schemas.__path__, "schemas."):
+        if info.name in _SKIP_MODULES:
+            continue
+        module = importlib.import_module(info.name)
+        for value in vars(module).values():
+            if (isinstance(value, type) and issubclass(value, msgspec.Struct) and value not in (Message, Frozen)
+                    and value.__module__ == module.__name__):  # fmt: skip
+                found[value.__name__] = value
+    return [found[name] for name in sorted(found)]
+
+
+def export_json_schemas(out_dir: Path) -> list[Path]:
+    out_dir.mkdir(parents=True, exist_ok=True)
+    written = []
+    for struct in public_messages():
+        path = out_dir / f"{struct.__name__}.json"
+        schema = msgspec.json.schema(struct)
+        schema.setdefault("$schema", "https://json-schema.org/draft/2020-12/schema")
+        path.write_text(json.dumps(schema, indent=2, sort_keys=True) + "\n")
+        written.append(path)
+    index = {"messages": [p.stem for p in written]}
+    (out_dir / "index.json").write_text(json.dumps(index, indent=2) + "\n")
+    return written

@@ -1,0 +1,63 @@
+"""Patient and encounter: who was burned, and the visit at which they were seen."""
+
+from __future__ import annotations
+
+import datetime as dt
+import enum
+from typing import Annotated
+
+import msgspec
+
+from schemas.base import HeightCm, Id, Message, ShortText, Timestamp, WeightKg
+
+
+class Sex(enum.StrEnum):
+    female = "female"
+    male = "male"
+    other = "other"
+    unknown = "unknown"
+
+
+class WeightSource(enum.StrEnum):
+    """Where a weight came from: resuscitation volumes are only as good as this."""
+
+    measured = "measured"
+    reported = "reported"
+    estimated = "estimated"
+
+
+class Patient(Message):
+    """Demographics of one patient. Either date_of_birth or age_estimate_years is needed for %TBSA."""
+
+    id: Id
+    given_name: ShortText = ""
+    family_name: ShortText = ""
+    date_of_birth: dt.date | None = None
+    age_estimate_years: Annotated[float, msgspec.Meta(ge=0, le=130)] | None = None
+    """Used when the date of birth is unknown (common in field clinics)."""
+    sex: Sex = Sex.unknown
+    weight_kg: WeightKg | None = None
+    weight_source: WeightSource | None = None
+    height_cm: HeightCm | None = None
+    medical_record_number: ShortText | None = None
+    pregnant: bool | None = None
+
+
+class EncounterMode(enum.StrEnum):
+    emergency = "emergency"
+    consultation = "consultation"
+
+
+class Encounter(Message):
+    """One visit. The resuscitation clock runs from time_of_injury, not time_of_arrival."""
+
+    id: Id
+    patient_id: Id
+    mode: EncounterMode
+    time_of_arrival: Timestamp
+    time_of_injury: Timestamp | None = None
+    clinician: ShortText = ""
+    """Name of the responsible clinician as written on the chart."""
+    facility: ShortText | None = None
+    weight_kg: WeightKg | None = None
+    """Weight at this visit; overrides the patient's recorded weight for calculators."""

@@ -1,0 +1,85 @@
+"""Versioned record envelopes: what the store keeps and what the API and change feed return."""
+
+from __future__ import annotations
+
+import enum
+
+import msgspec
+
+from schemas.base import Frozen, Id, Message, ShortText, Timestamp
+from schemas.burn_chart import BurnChart
+from schemas.clinical_results import Assessment
+from schemas.patient import Encounter, Patient
+from schemas.record_parts import Intake, Mechanism, PrimarySurvey, Resuscitation, SecondarySurvey
+
+
+class RecordKind(enum.StrEnum):
+    patient = "patient"
+    encounter = "encounter"
+    intake = "intake"
+    primary_survey = "primary_survey"
+    secondary_survey = "secondary_survey"
+    mechanism = "mechanism"
+    burn_chart = "burn_chart"
+    resuscitation = "resuscitation"
+    assessment = "assessment"
+    """Calculator results; written by the server only."""
+
+
+RECORD_TYPES: dict[RecordKind, type[msgspec.Struct]] = {
+    RecordKind.patient: Patient,
+    RecordKind.encounter: Encounter,
+    RecordKind.intake: Intake,
+    RecordKind.primary_survey: PrimarySurvey,
+    RecordKind.secondary_survey: SecondarySurvey,
+    RecordKind.mechanism: Mechanism,
+    RecordKind.burn_chart: BurnChart,
+    RecordKind.resuscitation: Resuscitation,
+    RecordKind.assessment: Assessment,
+}
+
+# Encounter parts are one per encounter: their record id is the encounter's id.
+ENCOUNTER_PARTS = frozenset(
+    {
+        RecordKind.intake,
+        RecordKind.primary_survey,
+        RecordKind.secondary_survey,
+        RecordKind.mechanism,
+        RecordKind.burn_chart,
+        RecordKind.resuscitation,
+        RecordKind.assessment,
+    }
+)
+
+
+class RecordMeta(Frozen):
+    kind: RecordKind
+    id: Id
+    version: int
+    """Starts at 1; every change writes the next version."""
+    created_at: Timestamp
+    updated_at: Timestamp
+    updated_by: ShortText
+    device_id: ShortText | None
+    deleted: bool = False
+    delete_reason: str | None = None
+    seq: int = 0
+    """Position in the gateway's change feed."""
+
+
+class Record(Frozen):
+    """One version of a record: metadata plus the record's data as a plain JSON object."""
+
+    meta: RecordMeta
+    data: dict
+
+
+class RecordHistory(Frozen):
+    kind: RecordKind
+    id: Id
+    versions: list[Record]
+
+
+class DeleteRequest(Message):
+    reason: ShortText
+    """Why the record is withdrawn (kept in the history and the audit trail)."""

@@ -1,0 +1,144 @@
+"""Shared fixtures: a real SQLite file per test, the real app, real accounts."""
+
+from __future__ import annotations
+
+import datetime as dt
+import os
+import socket
+import subprocess
+import sys
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import httpx
+import pytest
+from litestar.testing import TestClient
+
+from gateway.app import create_app
+from gateway.dependencies import Services
+from gateway.storage.database import Database
+from schemas.accounts import Role, UserCreate
+from schemas.config import Config, GatewayConfig, SecurityConfig
+from schemas.ids import uuid7
+
+REPO = Path(__file__).resolve().parents[1]
+SHARED = REPO.parent / "shared"
+PASSWORD = "correct horse battery"
+# Argon2 at its cheapest: tests exercise the logic, the benchmark measures the real cost.
+FAST_SECURITY = SecurityConfig(argon2_time_cost=1, argon2_memory_kib=8, argon2_parallelism=1)
+
+
+@pytest.fixture
+def config(tmp_path: Path) -> Config:
+    return Config(gateway=GatewayConfig(database=str(tmp_path / "gateway.sqlite3")), security=FAST_SECURITY)
+
+
+@pytest.fixture
+def app(config: Config):
+    return create_app(config)
+
+
+@pytest.fixture
+def services(app) -> Services:
+    return app.state.services
+
+
+@pytest.fixture
+def client(app) -> Iterator[TestClient]:
+    with TestClient(app) as c:
+        yield c
+
+
+def make_user(services: Services, username: str, role: Role) -> None:
+    services.accounts.create_user(None, UserCreate(username=username, password=PASSWORD, role=role))
+
+
+def login(client, username: str, device_token: str | None = None) -> dict[str, str]:
+    headers = {"X-Device-Token": device_token} if device_token else {}
+    r = client.post("/api/v1/auth/login", json={"username": username, "password": PASSWORD}, headers=headers)
+    assert r.status_code == 200, r.text
+    return {"Authorization": f"Bearer {r.json()['access_token']}"}
+
+
+@pytest.fixture
+def auth(client, services) -> dict[str, dict[str, str]]:
+    """Authorization headers for one logged-in user of each role, keyed by role name."""
+    for role in Role:
+        make_user(services, role.value, role)
+    return {role.value: login(client, role.value) for role in Role}
+
+
+def now() -> dt.datetime:
+    return dt.datetime.now(dt.UTC).replace(microsecond=0)
+
+
+def patient_body(patient_id: str | None = None, **extra) -> dict:
+    body = {"id": patient_id or uuid7(), "given_name": "Test", "family_name": "Patient", "date_of_birth": "1990-01-01",
+            "sex": "male", "weight_kg": 70.0, "height_cm": 175.0}  # fmt: skip
+    body.update(extra)
+    return body
+
+
+def encounter_body(patient_id: str, encounter_id: str | None = None, injury_hours_ago: float = 3, **extra) -> dict:
+    t = now()
+    body = {"id": encounter_id or uuid7(), "patient_id": patient_id, "mode": "emergency",
+            "time_of_injury": (t - dt.timedelta(hours=injury_hours_ago)).isoformat(),
+            "time_of_arrival": (t - dt.timedelta(hours=min(injury_hours_ago, 0.5))).isoformat(),
+            "clinician": "Dr. Test"}  # fmt: skip
+    body.update(extra)
+    return body
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+class GatewayProcess:
+    """`burnedge serve` as a real process, talking HTTP on loopback."""
+
+    def __init__(self, db: Path, port: int):
+        self.db, self.port = db, port
+        self.url = f"http://127.0.0.1:{port}"
+        self.proc: subprocess.Popen | None = None
+
+    def start(self, timeout: float = 30.0) -> GatewayProcess:
+        env = dict(os.environ, BURNEDGE_SECURITY_ARGON2_TIME_COST="1", BURNEDGE_SECURITY_ARGON2_MEMORY_KIB="8",
+                   BURNEDGE_SECURITY_ARGON2_PARALLELISM="1")  # fmt: skip
+        self.proc = subprocess.Popen(
+            [sys.executable, "-m", "gateway.cli", "--db", str(self.db), "serve", "--port", str(self.port)],
+            env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+        )  # fmt: skip
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            if self.proc.poll() is not None:
+                raise RuntimeError(f"gateway exited early: {self.proc.stdout.read().decode(errors='replace')}")
+            try:
+                if httpx.get(self.url + "/health", timeout=1).status_code == 200:
+                    return self
+            except httpx.HTTPError:
+                time.sleep(0.1)
+        self.stop()
+        raise RuntimeError("gateway did not become healthy in time")
+
+    def stop(self) -> None:
+        if self.proc and self.proc.poll() is None:
+            self.proc.terminate()
+            try:
+                self.proc.wait(10)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait()
+
+
+@pytest.fixture
+def gateway_process(tmp_path: Path) -> Iterator[GatewayProcess]:
+    process = GatewayProcess(tmp_path / "served.sqlite3", free_port())
+    yield process
+    process.stop()
+
+
+def open_db(path: str | Path) -> Database:
+    return Database(path)
