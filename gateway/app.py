@@ -8,6 +8,7 @@ from litestar.di import Provide
 from litestar.openapi import OpenAPIConfig
 
 from gateway import __version__
+from gateway.authentication import session_auth
 from gateway.controllers.auth import AdminController, AuthController
 from gateway.controllers.health import health
 from gateway.controllers.parts import PART_CONTROLLERS
@@ -43,6 +44,7 @@ def create_app(config: Config) -> Litestar:
             "services": Provide(provide_services, sync_to_thread=False),
             "principal": Provide(provide_principal, sync_to_thread=False),
         },
+        middleware=[session_auth],
         exception_handlers=EXCEPTION_HANDLERS,
         openapi_config=OpenAPIConfig(
             title="burnedge gateway",

@@ -12,7 +12,6 @@ from gateway.services.permissions import Principal
 from gateway.services.records import RecordService
 from gateway.storage.database import Database
 from schemas.config import Config
-from schemas.errors import AuthenticationFailed
 from sync.phone_sync import PhoneSync
 
 
@@ -41,11 +40,8 @@ def provide_services(request: Request) -> Services:
 
 
 def provide_principal(request: Request) -> Principal:
-    header = request.headers.get("authorization", "")
-    scheme, _, token = header.partition(" ")
-    if scheme.lower() != "bearer" or not token.strip():
-        raise AuthenticationFailed("log in first: send Authorization: Bearer <access_token>")
-    return request.app.state.services.accounts.authenticate(token.strip())
+    """Set by the session middleware (gateway/authentication.py) before the handler runs."""
+    return request.user
 
 
 def client_address(request: Request) -> str:

@@ -126,6 +126,8 @@ class PrimarySurvey(Message):
     circulation: Circulation = msgspec.field(default_factory=Circulation)
     disability: Disability = msgspec.field(default_factory=Disability)
     exposure: Exposure = msgspec.field(default_factory=Exposure)
+    pain_poorly_controlled: bool | None = None
+    """Pain not controlled with the analgesia available here (an ABA 2022 referral criterion)."""
 
 
 class BodyArea(enum.StrEnum):

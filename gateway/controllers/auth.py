@@ -27,7 +27,7 @@ class AuthController(Controller):
     path = "/api/v1/auth"
     tags = ["auth"]
 
-    @post("/login", sync_to_thread=True, status_code=200,
+    @post("/login", sync_to_thread=True, status_code=200, exclude_from_auth=True,
           summary="Exchange username and password for a session token")  # fmt: skip
     def login(
         self, request: Request, data: JSONBody[LoginRequest], services: ServicesDep,
@@ -37,7 +37,7 @@ class AuthController(Controller):
             data.username, data.password, client=client_address(request), device_token=device_token
         )
 
-    @post("/pair", sync_to_thread=False, status_code=201,
+    @post("/pair", sync_to_thread=False, status_code=201, exclude_from_auth=True,
           summary="Exchange a one-time pairing code for this phone's device token")  # fmt: skip
     def pair(self, request: Request, data: JSONBody[PairRequest], services: ServicesDep) -> DeviceToken:
         return services.accounts.pair(data, client=client_address(request))

@@ -15,7 +15,13 @@ class Health(Frozen):
     database: str
 
 
-@get("/health", sync_to_thread=False, tags=["health"], summary="Is the gateway up and its database readable?")
+@get(
+    "/health",
+    sync_to_thread=False,
+    exclude_from_auth=True,
+    tags=["health"],
+    summary="Is the gateway up and its database readable?",
+)
 def health(services: ServicesDep) -> Health:
     services.db.connection().execute("SELECT 1 FROM _sqlite_migrations LIMIT 1").fetchall()
     return Health(status="ok", version=__version__, database=str(services.db.path.name))

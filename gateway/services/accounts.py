@@ -150,10 +150,10 @@ class AccountService:
             )
             .fetchone()
         )
+        if row is not None and row["device_revoked_at"]:
+            raise AuthenticationFailed("this phone's pairing was revoked: ask an administrator to pair it again")
         if row is None or row["revoked_at"] or not row["active"]:
             raise AuthenticationFailed("session unknown or ended: log in again")
-        if row["device_revoked_at"]:
-            raise AuthenticationFailed("this phone's pairing was revoked: ask an administrator to pair it again")
         if dt.datetime.fromisoformat(row["expires_at"]) <= utcnow():
             raise AuthenticationFailed("session expired: log in again")
         return Principal(row["user_id"], row["username"], Role(row["role"]), row["device_id"], th)

@@ -124,6 +124,7 @@ def _hours_since_injury(time_of_injury: dt.datetime, as_of: dt.datetime, skew_s:
             f"time of injury {time_of_injury.isoformat()} is after the assessment time "
             f"{as_of.isoformat()}: check the time of injury and the device clock"
         )
+    # An injury up to clock_skew_s after as_of is clock drift between devices: count it as 0 h.
     return max(seconds, 0.0) / 3600.0
 
 

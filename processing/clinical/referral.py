@@ -103,16 +103,17 @@ def _critical_areas(chart: BurnChart, depths: frozenset[BurnDepth]) -> list[str]
     for area in AREA_REGIONS:
         hits = _area_hits(chart, area, depths)
         if hits:
-            note = " (the anterior head region is taken to include the face)" if area is SpecialArea.face else ""
+            from_head = any(hit.startswith(LundBrowderRegion.head_anterior.value) for hit in hits)
+            note = " (the anterior head region is taken to include the face)" if from_head else ""
             found.append(f"{area.value}: {', '.join(hits)}{note}")
     return found
 
 
 def _child(inp: ReferralInputs) -> tuple[bool | None, str]:
     child = is_child(inp.age_years, inp.weight_kg, inp.config)
-    known = [f"age {inp.age_years:g} years" if inp.age_years is not None else "age unknown"]
+    known = [f"age {round(inp.age_years, 1):g} years" if inp.age_years is not None else "age unknown"]
     if inp.weight_kg is not None:
-        known.append(f"weight {inp.weight_kg:g} kg")
+        known.append(f"weight {round(inp.weight_kg, 1):g} kg")
     return child, ", ".join(known)
 
 

@@ -1,0 +1,176 @@
+"""Accounts, roles, phone pairing, revocation and login throttling over the real app."""
+
+from __future__ import annotations
+
+import re
+
+import pytest
+
+from schemas.accounts import Role
+from schemas.ids import uuid7
+from tests.conftest import PASSWORD, encounter_body, login, make_user, now, patient_body
+
+# The ways in: logging in and pairing a phone. Everything else needs a session.
+UNAUTHENTICATED = {("POST", "/api/v1/auth/login"), ("POST", "/api/v1/auth/pair"), ("GET", "/health")}
+
+
+def _concrete(path: str) -> str:
+    return re.sub(r"\{[^}]+\}", uuid7(), path)
+
+
+def test_every_endpoint_except_health_and_the_ways_in_requires_authentication(app, client):
+    checked = 0
+    for route in app.routes:
+        if route.path.startswith("/schema"):
+            continue
+        for method in sorted(route.methods - {"OPTIONS", "HEAD"}):
+            if (method, route.path) in UNAUTHENTICATED:
+                continue
+            r = client.request(method, _concrete(route.path), json={})
+            assert r.status_code == 401, f"{method} {route.path} answered {r.status_code}"
+            assert r.headers["content-type"].startswith("application/problem+json")
+            checked += 1
+    assert checked >= 30
+
+
+def test_a_bad_or_missing_token_is_refused(client):
+    assert client.get("/api/v1/patients", headers={"Authorization": "Bearer nonsense"}).status_code == 401
+    assert client.get("/api/v1/patients", headers={"Authorization": "Basic abc"}).status_code == 401
+
+
+def test_passwords_are_stored_as_argon2id_hashes(services):
+    make_user(services, "dr.who", Role.clinician)
+    stored = services.db.connection().execute("SELECT password_hash FROM users").fetchone()[0]
+    assert stored.startswith("$argon2id$") and PASSWORD not in stored
+
+
+def test_roles_limit_what_each_user_may_do(client, auth):
+    clin, nurse, consultant, admin = (auth[r] for r in ("clinician", "nurse", "consultant", "admin"))
+    p = patient_body()
+    assert client.post("/api/v1/patients", json=p, headers=nurse).status_code == 201
+    e = encounter_body(p["id"])
+    assert client.post("/api/v1/encounters", json=e, headers=nurse).status_code == 201
+    chart = {"encounter_id": e["id"], "assessed_at": now().isoformat(),
+             "entries": [{"region": "trunk_anterior", "fraction": 0.5, "depth": "deep_partial"}]}  # fmt: skip
+    url = f"/api/v1/encounters/{e['id']}/burn-chart"
+    assert client.put(url, json=chart, headers={**nurse, "If-None-Match": "*"}).status_code == 403
+    assert client.put(url, json=chart, headers={**consultant, "If-None-Match": "*"}).status_code == 403
+    assert client.put(url, json=chart, headers={**clin, "If-None-Match": "*"}).status_code == 201
+    assert client.get(url, headers=consultant).status_code == 200
+    assert client.get(f"/api/v1/patients/{p['id']}", headers=admin).status_code == 403
+    assert client.get("/api/v1/patients", headers=admin).status_code == 403
+    withdraw = {"params": {"reason": "test"}, "headers": {**nurse, "If-Match": '"1"'}}
+    assert client.delete(f"/api/v1/patients/{p['id']}", **withdraw).status_code == 403
+    assert client.post("/api/v1/admin/users", json={"username": "x1", "password": PASSWORD, "role": "admin"},
+                       headers=clin).status_code == 403  # fmt: skip
+    assert client.get("/api/v1/admin/audit", headers=clin).status_code == 403
+    assert client.get("/api/v1/admin/audit", headers=admin).status_code == 200
+    # the admin sees no clinical record in the change feed either
+    assert client.get("/api/v1/sync/changes", headers=admin).json()["changes"] == []
+
+
+def test_admin_creates_users_and_usernames_are_unique(client, auth):
+    admin = auth["admin"]
+    body = {"username": "nurse.joy", "password": PASSWORD, "role": "nurse", "display_name": "Joy"}
+    assert client.post("/api/v1/admin/users", json=body, headers=admin).status_code == 201
+    assert client.post("/api/v1/admin/users", json=body, headers=admin).status_code == 409
+    short = {**body, "username": "nurse.kim", "password": "short"}
+    assert client.post("/api/v1/admin/users", json=short, headers=admin).status_code == 400
+    login(client, "nurse.joy")
+
+
+def _pair(client, admin, name="ward phone") -> str:
+    code = client.post("/api/v1/admin/pairing-codes", json={"device_name": name}, headers=admin).json()["code"]
+    r = client.post("/api/v1/auth/pair", json={"code": code.lower(), "device_fingerprint": "android-1234"})
+    assert r.status_code == 201, r.text
+    return r.json()
+
+
+def test_pairing_code_is_single_use_and_gives_a_device_token(client, auth):
+    admin = auth["admin"]
+    code = client.post("/api/v1/admin/pairing-codes", json={"device_name": "bay 3"}, headers=admin).json()["code"]
+    assert re.fullmatch(r"[A-Z2-9]{4}-[A-Z2-9]{4}", code)
+    assert client.post("/api/v1/auth/pair", json={"code": code}).status_code == 201
+    again = client.post("/api/v1/auth/pair", json={"code": code})
+    assert again.status_code == 401 and "already used" in again.json()["detail"]
+    assert client.post("/api/v1/auth/pair", json={"code": "ABCD-EFGH"}).status_code == 401
+    devices = client.get("/api/v1/admin/devices", headers=admin).json()
+    assert [d["name"] for d in devices] == ["bay 3"]
+
+
+def test_expired_pairing_code_is_refused(client, auth, services):
+    code = client.post("/api/v1/admin/pairing-codes", json={"device_name": "old"}, headers=auth["admin"]).json()["code"]
+    services.db.connection().execute("UPDATE pairing_codes SET expires_at = '2000-01-01T00:00:00+00:00'")
+    r = client.post("/api/v1/auth/pair", json={"code": code})
+    assert r.status_code == 401 and "expired" in r.json()["detail"]
+
+
+def test_a_revoked_device_token_stops_working_at_once(client, auth):
+    device = _pair(client, auth["admin"])
+    phone = login(client, "clinician", device_token=device["device_token"])
+    me = client.get("/api/v1/auth/me", headers=phone).json()
+    assert me["device_id"] == device["device_id"]
+    assert client.get("/api/v1/patients", headers=phone).status_code == 200
+    revoked = client.post(f"/api/v1/admin/devices/{device['device_id']}/revoke", headers=auth["admin"])
+    assert revoked.status_code == 200 and revoked.json()["revoked_at"] is not None
+    refused = client.get("/api/v1/patients", headers=phone)
+    assert refused.status_code == 401 and "revoked" in refused.json()["detail"]
+    relogin = client.post("/api/v1/auth/login", json={"username": "clinician", "password": PASSWORD},
+                          headers={"X-Device-Token": device["device_token"]})  # fmt: skip
+    assert relogin.status_code == 401 and "revoked" in relogin.json()["detail"]
+    # other sessions are untouched
+    assert client.get("/api/v1/patients", headers=auth["clinician"]).status_code == 200
+
+
+def test_writes_from_a_paired_phone_record_the_device(client, auth, services):
+    device = _pair(client, auth["admin"])
+    phone = login(client, "clinician", device_token=device["device_token"])
+    r = client.post("/api/v1/patients", json=patient_body(), headers=phone)
+    assert r.json()["meta"]["device_id"] == device["device_id"]
+    row = services.db.connection().execute("SELECT device_id FROM audit_log WHERE action = 'record.create'").fetchone()
+    assert row[0] == device["device_id"]
+
+
+def test_logout_ends_the_session(client, auth):
+    assert client.post("/api/v1/auth/logout", headers=auth["nurse"]).status_code == 204
+    assert client.get("/api/v1/patients", headers=auth["nurse"]).status_code == 401
+
+
+def test_repeated_failed_logins_are_slowed_down(client, services):
+    make_user(services, "target", Role.clinician)
+    free = services.config.security.login_free_failures
+    for _ in range(free):
+        r = client.post("/api/v1/auth/login", json={"username": "target", "password": "wrong password!"})
+        assert r.status_code == 401
+    locked = client.post("/api/v1/auth/login", json={"username": "target", "password": "wrong password!"})
+    assert locked.status_code == 401  # this failure triggers the lock-out
+    r = client.post("/api/v1/auth/login", json={"username": "target", "password": PASSWORD})
+    assert r.status_code == 429
+    assert int(r.headers["retry-after"]) >= 1
+    assert "wait" in r.json()["detail"]
+    # once the lock-out has passed, the right password works and resets the count
+    services.db.connection().execute("UPDATE login_throttle SET locked_until = '2000-01-01T00:00:00+00:00'")
+    assert client.post("/api/v1/auth/login", json={"username": "target", "password": PASSWORD}).status_code == 200
+
+
+def test_lockout_grows_with_further_failures(client, services):
+    make_user(services, "victim", Role.nurse)
+    cfg = services.config.security
+    delays = []
+    for _ in range(cfg.login_free_failures + 3):
+        services.db.connection().execute("UPDATE login_throttle SET locked_until = NULL")
+        client.post("/api/v1/auth/login", json={"username": "victim", "password": "not the password"})
+        r = client.post("/api/v1/auth/login", json={"username": "victim", "password": "not the password"})
+        if r.status_code == 429:
+            delays.append(int(r.headers["retry-after"]))
+    assert delays == sorted(delays) and delays[-1] > delays[0]
+
+
+def test_unknown_user_fails_like_a_wrong_password(client):
+    r = client.post("/api/v1/auth/login", json={"username": "nobody", "password": PASSWORD})
+    assert r.status_code == 401 and r.json()["detail"] == "wrong username or password"
+
+
+@pytest.mark.parametrize("role", list(Role))
+def test_me_reports_the_role(client, auth, role):
+    assert client.get("/api/v1/auth/me", headers=auth[role.value]).json()["role"] == role.value
