@@ -14,7 +14,7 @@ from gateway.controllers.health import health
 from gateway.controllers.parts import PART_CONTROLLERS
 from gateway.controllers.records import EncounterController, PatientController
 from gateway.controllers.sync import SyncController
-from gateway.dependencies import Services, provide_principal, provide_services
+from gateway.dependencies import Services, provide_services
 from gateway.errors import EXCEPTION_HANDLERS
 from gateway.storage.database import Database
 from schemas.config import Config
@@ -41,8 +41,7 @@ def create_app(config: Config) -> Litestar:
             SyncController,
         ],  # fmt: skip
         dependencies={
-            "services": Provide(provide_services, sync_to_thread=False),
-            "principal": Provide(provide_principal, sync_to_thread=False),
+            "services": Provide(provide_services, sync_to_thread=False, use_cache=True),
         },
         middleware=[session_auth],
         exception_handlers=EXCEPTION_HANDLERS,

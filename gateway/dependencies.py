@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from litestar import Request
+from litestar.datastructures import State
 from litestar.di import NamedDependency
 
 from gateway.services.accounts import AccountService
@@ -39,15 +40,16 @@ def provide_services(request: Request) -> Services:
     return request.app.state.services
 
 
-def provide_principal(request: Request) -> Principal:
-    """Set by the session middleware (gateway/authentication.py) before the handler runs."""
-    return request.user
-
-
 def client_address(request: Request) -> str:
     return request.client.host if request.client else "unknown"
 
 
-# Handlers declare these by name ("services", "principal"); the app factory provides them.
 ServicesDep = NamedDependency[Services]
-PrincipalDep = NamedDependency[Principal]
+"""Declared by name ("services"); the app factory provides it."""
+
+AuthedRequest = Request[Principal, str, State]
+"""A request the session middleware has authenticated: request.user is the Principal.
+
+Handlers read the principal from here rather than through a second dependency:
+resolving a request-bound dependency cost about a third of a record read's throughput.
+"""

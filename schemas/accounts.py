@@ -80,3 +80,12 @@ class Device(Frozen):
     paired_by: str
     revoked_at: Timestamp | None
     last_seen_at: Timestamp | None
+
+
+class Identity(Frozen):
+    """Who the current session belongs to."""
+
+    user_id: str
+    username: str
+    role: Role
+    device_id: str | None

@@ -55,6 +55,10 @@ class SecurityConfig(Message):
     login_max_delay_s: Annotated[int, msgspec.Meta(ge=1)] = 900
     """Longest lock-out."""
 
+    def __post_init__(self) -> None:
+        if self.argon2_memory_kib < 8 * self.argon2_parallelism:
+            raise ValueError("argon2_memory_kib must be at least 8 x argon2_parallelism")
+
 
 class ClinicalConfig(Message):
     child_max_age_years: float = 14.0

@@ -6,6 +6,7 @@ import datetime as dt
 
 import pytest
 
+from processing.clinical import referral, referral_aba2022
 from processing.clinical.lund_browder import compute_tbsa
 from processing.clinical.referral import ReferralInputs, assess_referral
 from schemas.burn_chart import BurnChart, BurnChartEntry, SpecialArea, SpecialAreaInvolvement
@@ -56,19 +57,26 @@ def inputs(
     burn_greatest=None,
     comorbidities=(),
     social=None,
+    pain=False,
     with_chart=True,
+    with_primary=True,
 ) -> ReferralInputs:
     """A complete record with nothing flagged unless asked: every criterion can be decided."""
     c = chart(*entries, special=special) if with_chart else None
+    primary = PrimarySurvey(
+        encounter_id=EID,
+        assessed_at=AT,
+        airway=airway or Airway(),
+        breathing=breathing or Breathing(),
+        pain_poorly_controlled=pain,
+    )
     return ReferralInputs(
         age_years=age,
         weight_kg=weight,
         tbsa=compute_tbsa(c, age) if c is not None and age is not None else None,
         chart=c,
         mechanism=Mechanism(encounter_id=EID, type=mechanism, enclosed_space=enclosed, voltage_v=voltage),
-        primary=PrimarySurvey(
-            encounter_id=EID, assessed_at=AT, airway=airway or Airway(), breathing=breathing or Breathing()
-        ),
+        primary=primary if with_primary else None,
         secondary=SecondarySurvey(
             encounter_id=EID,
             assessed_at=AT,
@@ -152,11 +160,14 @@ def test_chemical_is_immediate_in_both():
     assert "aba2006.chemical" in r.older.met
 
 
-def test_child_3_years_4_percent_scald():
-    # 1-year column: anterior trunk 13 x 4/13 = 4 %TBSA
+def test_child_3_years_4_percent_scald_is_immediate():
+    # 1-year column: anterior trunk 13 x 4/13 = 4 %TBSA; ABA 2022 puts all pediatric burns in the immediate tier
     r = assess_referral(inputs((R.trunk_anterior, 4 / 13, D.superficial_partial), age=3, weight=14, mechanism=M.scald))
     assert set(r.current.met) == {"aba2022.pediatric", "aba2022.partial_lt_10"}
-    assert r.current.recommendation == CONSULT
+    assert r.current.recommendation == IMMEDIATE
+    pediatric = criterion(r.current, "aba2022.pediatric")
+    assert pediatric.tier is ReferralTier.immediate
+    assert pediatric.reason == "child (age 3 years, weight 14 kg) with burns charted (trunk_anterior)"
     facility = criterion(r.older, "aba2006.children_facility")
     assert facility.met is None
     assert "facility" in facility.reason
@@ -173,6 +184,20 @@ def test_children_facility_does_not_apply_to_adults():
 def test_child_by_weight_is_pediatric():
     r = assess_referral(inputs((R.trunk_anterior, 0.1, D.superficial_partial), age=16, weight=28))
     assert "aba2022.pediatric" in r.current.met
+    assert r.current.recommendation == IMMEDIATE
+
+
+def test_child_superficial_burn_is_still_a_pediatric_burn():
+    r = assess_referral(inputs((R.lower_arm_left_anterior, 0.5, D.superficial), age=8, weight=25))
+    assert r.current.met == ["aba2022.pediatric"]
+    assert r.current.recommendation == IMMEDIATE
+
+
+def test_pediatric_undetermined_without_age_or_weight():
+    r = assess_referral(inputs((R.trunk_anterior, 0.1, D.superficial_partial), age=None, weight=None))
+    pediatric = criterion(r.current, "aba2022.pediatric")
+    assert pediatric.met is None
+    assert "age or weight is needed" in pediatric.reason
 
 
 def test_hand_deep_partial_is_immediate_superficial_partial_only_older_list():
@@ -201,18 +226,78 @@ def test_face_from_anterior_head_and_perineum_from_special_areas():
     [
         (Airway(singed_nasal_hair=True, carbonaceous_sputum=True), None, False, False),
         (Airway(stridor=True), None, False, False),
+        (Airway(carbonaceous_sputum=True), None, False, False),
+        (Airway(soot_in_mouth_or_nose=True), None, False, False),
+        (Airway(hoarse_voice=True), None, False, False),
+        (Airway(oropharyngeal_oedema=True), None, False, False),
         (Airway(intervention=AirwayIntervention.intubated), None, False, False),
+        (Airway(intervention=AirwayIntervention.surgical_airway), None, False, False),
         (None, Breathing(carboxyhaemoglobin_percent=12), False, False),
-        (Airway(facial_burns=True), None, True, False),
-        (None, None, True, True),  # facial burn on the chart, enclosed space
+        (Airway(carbonaceous_sputum=True, facial_burns=True), None, True, False),
     ],
 )
-def test_inhalation_signs_are_immediate(airway, breathing, enclosed, face):
+def test_suspected_inhalation_signs_are_immediate(airway, breathing, enclosed, face):
     entries = [(R.head_anterior, 0.2, D.superficial)] if face else [(R.trunk_anterior, 0.1, D.superficial)]
     r = assess_referral(inputs(*entries, airway=airway, breathing=breathing, enclosed=enclosed))
     assert "aba2022.inhalation" in r.current.met
+    assert criterion(r.current, "aba2022.inhalation").tier is ReferralTier.immediate
     assert r.current.recommendation == IMMEDIATE
     assert "aba2006.inhalation" in r.older.met
+
+
+def test_carbonaceous_sputum_is_immediate():
+    r = assess_referral(inputs((R.trunk_anterior, 0.1, D.superficial), airway=Airway(carbonaceous_sputum=True)))
+    assert r.current.met == ["aba2022.inhalation"]
+    assert criterion(r.current, "aba2022.inhalation").reason == "carbonaceous sputum"
+    assert r.current.recommendation == IMMEDIATE
+
+
+@pytest.mark.parametrize(
+    "airway, enclosed, face, mechanism, sign",
+    [
+        (Airway(facial_burns=True), True, False, M.flame, "facial burns"),
+        (None, True, True, M.flame, "facial burns"),  # facial burn on the chart, enclosed space
+        (Airway(singed_nasal_hair=True), False, False, M.flame, "singed facial or nasal hair"),
+        (None, True, False, M.flame, "smoke exposure (flame burn in an enclosed space)"),
+        (None, False, True, M.flame, "facial burns"),  # a facial flash burn outdoors
+    ],
+)
+def test_potential_inhalation_signs_need_consultation(airway, enclosed, face, mechanism, sign):
+    entries = [(R.head_anterior, 0.2, D.superficial)] if face else [(R.trunk_anterior, 0.1, D.superficial)]
+    r = assess_referral(inputs(*entries, airway=airway, enclosed=enclosed, mechanism=mechanism))
+    assert r.current.met == ["aba2022.inhalation_potential"]
+    potential = criterion(r.current, "aba2022.inhalation_potential")
+    assert potential.tier is ReferralTier.consult
+    assert sign in potential.reason
+    assert criterion(r.current, "aba2022.inhalation").met is False
+    assert r.current.recommendation == CONSULT
+
+
+def test_facial_flash_burn_in_enclosed_flame_is_consult_not_immediate():
+    # superficial flash burn of the face in a house fire, no stronger airway sign
+    r = assess_referral(inputs((R.head_anterior, 0.3, D.superficial), enclosed=True, mechanism=M.flame))
+    assert r.current.met == ["aba2022.inhalation_potential"]
+    assert criterion(r.current, "aba2022.inhalation_potential").reason == (
+        "facial burns (a possible flash burn); smoke exposure (flame burn in an enclosed space)"
+    )
+    assert r.current.recommendation == CONSULT
+    # the older list still reads this as inhalation injury
+    assert "aba2006.inhalation" in r.older.met
+
+
+def test_enclosed_space_scald_is_not_smoke_exposure():
+    r = assess_referral(inputs((R.trunk_anterior, 0.1, D.superficial), enclosed=True, mechanism=M.scald))
+    assert criterion(r.current, "aba2022.inhalation_potential").met is False
+
+
+def test_inhalation_undetermined_without_primary_survey():
+    r = assess_referral(inputs((R.trunk_anterior, 0.1, D.superficial), with_primary=False))
+    assert criterion(r.current, "aba2022.inhalation").met is None
+    assert criterion(r.current, "aba2022.inhalation_potential").met is None
+    assert "singed hair" in criterion(r.current, "aba2022.inhalation_potential").reason
+    # smoke exposure is still read from the mechanism
+    smoke = assess_referral(inputs((R.trunk_anterior, 0.1, D.superficial), with_primary=False, enclosed=True))
+    assert criterion(smoke.current, "aba2022.inhalation_potential").met is True
 
 
 def test_no_inhalation_signs():
@@ -246,6 +331,7 @@ def test_no_chart_leaves_size_criteria_undetermined():
         "aba2022.partial_ge_10",
         "aba2022.critical_areas_deep",
         "aba2022.partial_lt_10",
+        "aba2022.potentially_deep",
     ):
         assert criterion(r.current, code).met is None
         assert criterion(r.current, code).reason == "no burn chart recorded"
@@ -278,16 +364,30 @@ def test_concomitant_trauma():
     assert criterion(trauma_first.older, "aba2006.trauma").met is False
 
 
-def test_comorbidities_and_social_needs():
+def test_comorbidity_is_immediate():
+    r = assess_referral(inputs((R.trunk_anterior, 0.1, D.superficial), comorbidities=["diabetes mellitus"]))
+    assert r.current.met == ["aba2022.comorbidities"]
+    assert criterion(r.current, "aba2022.comorbidities").tier is ReferralTier.immediate
+    assert criterion(r.current, "aba2022.comorbidities").reason == "significant comorbidities: diabetes mellitus"
+    assert r.current.recommendation == IMMEDIATE
+    assert "aba2006.comorbidities" in r.older.met
+
+
+def test_concomitant_trauma_is_immediate():
+    r = assess_referral(inputs((R.trunk_anterior, 0.1, D.superficial), injuries=["open femur fracture"]))
+    assert r.current.met == ["aba2022.trauma"]
+    assert criterion(r.current, "aba2022.trauma").tier is ReferralTier.immediate
+    assert r.current.recommendation == IMMEDIATE
+
+
+def test_social_needs_are_only_on_the_older_list():
+    # the ABA 2022 table has no row for special social, emotional or rehabilitative needs
     r = assess_referral(
-        inputs(
-            (R.trunk_anterior, 0.1, D.superficial_partial),
-            comorbidities=["diabetes mellitus"],
-            social=SocialContext(substance_use=True),
-        )
+        inputs((R.trunk_anterior, 0.1, D.superficial), social=SocialContext(substance_use=True, notes="lives alone"))
     )
-    assert {"aba2022.comorbidities", "aba2022.social_support"} <= set(r.current.met)
-    assert {"aba2006.comorbidities", "aba2006.special_needs"} <= set(r.older.met)
+    assert r.current.met == []
+    assert all("social" not in c.code for c in r.current.criteria)
+    assert r.older.met == ["aba2006.special_needs"]
 
 
 def test_child_with_safeguarding_concern_is_immediate():
@@ -300,9 +400,106 @@ def test_child_with_safeguarding_concern_is_immediate():
             social=SocialContext(safeguarding_concern=True),
         )
     )
-    assert "aba2022.pediatric_safeguarding" in r.current.met
+    assert "aba2022.pediatric" in r.current.met
+    assert "safeguarding concern recorded (possible non-accidental trauma)" in (
+        criterion(r.current, "aba2022.pediatric").reason
+    )
     assert r.current.recommendation == IMMEDIATE
     assert "aba2006.special_needs" in r.older.met
+
+
+def test_child_with_safeguarding_concern_but_no_chart_is_immediate():
+    r = assess_referral(
+        ReferralInputs(
+            age_years=2,
+            weight_kg=12,
+            intake=Intake(encounter_id=EID, social=SocialContext(safeguarding_concern=True)),
+        )
+    )
+    assert criterion(r.current, "aba2022.pediatric").met is True
+    assert r.current.recommendation == IMMEDIATE
+
+
+def test_deep_partial_3_percent_forearm_adult_is_potentially_deep():
+    # adult right lower arm 1.5 + 1.5 = 3 %TBSA deep partial: not a critical area
+    r = assess_referral(
+        inputs((R.lower_arm_right_anterior, 1.0, D.deep_partial), (R.lower_arm_right_posterior, 1.0, D.deep_partial))
+    )
+    assert set(r.current.met) == {"aba2022.partial_lt_10", "aba2022.potentially_deep"}
+    deep = criterion(r.current, "aba2022.potentially_deep")
+    assert deep.tier is ReferralTier.consult
+    assert deep.reason == (
+        "deep partial-thickness burns 3.00 %TBSA (lower_arm_right_anterior, lower_arm_right_posterior): "
+        "potentially deep"
+    )
+    assert r.current.recommendation == CONSULT
+
+
+def test_full_thickness_alone_is_not_counted_as_potentially_deep():
+    r = assess_referral(inputs((R.thigh_left_anterior, 0.2, D.full_thickness)))
+    assert criterion(r.current, "aba2022.potentially_deep").met is False
+    assert r.current.recommendation == IMMEDIATE
+
+
+def test_deep_partial_special_area_is_potentially_deep():
+    r = assess_referral(
+        inputs((R.trunk_anterior, 0.0, D.superficial), special=[(SpecialArea.major_joint, D.deep_partial)])
+    )
+    assert "aba2022.potentially_deep" in r.current.met
+    assert "aba2022.critical_areas_deep" in r.current.met
+
+
+def test_poorly_controlled_pain():
+    entries = [(R.trunk_anterior, 0.1, D.superficial)]
+    poor = assess_referral(inputs(*entries, pain=True))
+    assert poor.current.met == ["aba2022.pain"]
+    assert criterion(poor.current, "aba2022.pain").tier is ReferralTier.immediate
+    assert poor.current.recommendation == IMMEDIATE
+    unknown = assess_referral(inputs(*entries, pain=None))
+    pain = criterion(unknown.current, "aba2022.pain")
+    assert pain.met is None
+    assert pain.reason == "record whether pain is controlled"
+    assert unknown.current.undetermined == ["aba2022.pain"]
+    assert unknown.current.recommendation == (
+        "No ABA referral criterion met on the recorded data; not assessable from the record: aba2022.pain"
+    )
+    no_survey = criterion(assess_referral(inputs(*entries, with_primary=False)).current, "aba2022.pain")
+    assert no_survey.met is None
+    assert "record whether pain is controlled" in no_survey.reason
+    assert criterion(assess_referral(inputs(*entries)).current, "aba2022.pain").met is False
+
+
+def test_consultation_names_open_immediate_criteria():
+    r = assess_referral(inputs((R.lower_arm_left_anterior, 0.5, D.superficial_partial), pain=None))
+    assert r.current.met == ["aba2022.partial_lt_10"]
+    assert r.current.recommendation == f"{CONSULT}; not assessable from the record: aba2022.pain"
+
+
+def test_current_table_matches_the_published_two_tiers():
+    immediate, consult = ReferralTier.immediate, ReferralTier.consult
+    r = assess_referral(inputs((R.trunk_anterior, 0.1, D.superficial)))
+    assert r.current.version == "ABA 2022 (two-tier)"
+    assert [(c.code, c.tier) for c in r.current.criteria] == [
+        ("aba2022.full_thickness", immediate),
+        ("aba2022.partial_ge_10", immediate),
+        ("aba2022.critical_areas_deep", immediate),
+        ("aba2022.comorbidities", immediate),
+        ("aba2022.trauma", immediate),
+        ("aba2022.pain", immediate),
+        ("aba2022.inhalation", immediate),
+        ("aba2022.pediatric", immediate),
+        ("aba2022.chemical", immediate),
+        ("aba2022.high_voltage", immediate),
+        ("aba2022.partial_lt_10", consult),
+        ("aba2022.potentially_deep", consult),
+        ("aba2022.inhalation_potential", consult),
+        ("aba2022.low_voltage", consult),
+    ]
+    assert len(r.older.criteria) == 10
+    for module in (referral, referral_aba2022):
+        doc = " ".join(module.__doc__.split())
+        assert "American Burn Association, Guidelines for Burn Patient Referral, 2022" in doc
+        assert "checked against the current published version by the clinical lead" in doc
 
 
 def test_superficial_only_adult_burn_meets_nothing():

@@ -52,7 +52,9 @@ def week_offline(client, auth):
         assert client.post("/api/v1/patients", json=p, headers=online).status_code == 201
     _, cursor = _pull_all(client, phone, 0, 50)
     for p in patients[:5]:  # edited at the clinic during the week
-        r = client.put(f"/api/v1/patients/{p['id']}", json={**p, "weight_kg": 80.0}, headers={**online, "If-Match": "1"})
+        r = client.put(
+            f"/api/v1/patients/{p['id']}", json={**p, "weight_kg": 80.0}, headers={**online, "If-Match": "1"}
+        )
         assert r.status_code == 200
     return patients, cursor
 
@@ -74,7 +76,9 @@ def _queue(patients: list[dict]) -> tuple[list[dict], dict]:
     queue += [_m("patient", p["id"], "update", {**p, "height_cm": 160.0}, base=1) for p in patients]
     for e in encounters[:20]:
         queue.append(_m("mechanism", e["id"], "create", {"encounter_id": e["id"], "type": "scald"}))
-    queue += [_m("mechanism", e["id"], "delete", base=1, reason="entered on the wrong encounter") for e in encounters[:10]]
+    queue += [
+        _m("mechanism", e["id"], "delete", base=1, reason="entered on the wrong encounter") for e in encounters[:10]
+    ]
     assert len(queue) == 200
     return queue, {"patients": new_patients, "encounters": encounters}
 

@@ -7,11 +7,12 @@ from typing import Annotated
 from litestar import Controller, Request, get, post
 from litestar.params import FromPath, HeaderParameter, JSONBody, QueryParameter
 
-from gateway.dependencies import PrincipalDep, ServicesDep, client_address
+from gateway.dependencies import AuthedRequest, ServicesDep, client_address
 from gateway.services import audit_trail
 from schemas.accounts import (
     Device,
     DeviceToken,
+    Identity,
     LoginRequest,
     PairingCode,
     PairingCodeRequest,
@@ -43,13 +44,13 @@ class AuthController(Controller):
         return services.accounts.pair(data, client=client_address(request))
 
     @post("/logout", sync_to_thread=False, status_code=204, summary="End this session")
-    def logout(self, principal: PrincipalDep, services: ServicesDep) -> None:
-        services.accounts.logout(principal)
+    def logout(self, request: AuthedRequest, services: ServicesDep) -> None:
+        services.accounts.logout(request.user)
 
     @get("/me", sync_to_thread=False, summary="Who am I")
-    def me(self, principal: PrincipalDep) -> dict:
-        return {"user_id": principal.user_id, "username": principal.username, "role": principal.role.value,
-                "device_id": principal.device_id}  # fmt: skip
+    def me(self, request: AuthedRequest) -> Identity:
+        p = request.user
+        return Identity(user_id=p.user_id, username=p.username, role=p.role, device_id=p.device_id)
 
 
 class AdminController(Controller):
@@ -57,36 +58,36 @@ class AdminController(Controller):
     tags = ["admin"]
 
     @post("/users", sync_to_thread=True, summary="Create a user account")
-    def create_user(self, data: JSONBody[UserCreate], principal: PrincipalDep, services: ServicesDep) -> User:
-        return services.accounts.create_user(principal, data)
+    def create_user(self, data: JSONBody[UserCreate], request: AuthedRequest, services: ServicesDep) -> User:
+        return services.accounts.create_user(request.user, data)
 
     @get("/users", sync_to_thread=False, summary="List user accounts")
-    def list_users(self, principal: PrincipalDep, services: ServicesDep) -> list[User]:
-        return services.accounts.list_users(principal)
+    def list_users(self, request: AuthedRequest, services: ServicesDep) -> list[User]:
+        return services.accounts.list_users(request.user)
 
     @post("/pairing-codes", sync_to_thread=False, summary="Create a short-lived one-time code to pair a phone")
     def pairing_code(
-        self, data: JSONBody[PairingCodeRequest], principal: PrincipalDep, services: ServicesDep
+        self, data: JSONBody[PairingCodeRequest], request: AuthedRequest, services: ServicesDep
     ) -> PairingCode:
-        return services.accounts.create_pairing_code(principal, data)
+        return services.accounts.create_pairing_code(request.user, data)
 
     @get("/devices", sync_to_thread=False, summary="List paired phones")
-    def devices(self, principal: PrincipalDep, services: ServicesDep) -> list[Device]:
-        return services.accounts.list_devices(principal)
+    def devices(self, request: AuthedRequest, services: ServicesDep) -> list[Device]:
+        return services.accounts.list_devices(request.user)
 
     @post("/devices/{device_id:str}/revoke", sync_to_thread=False, status_code=200,
           summary="Revoke a phone: its token and sessions stop working at once")  # fmt: skip
-    def revoke(self, device_id: FromPath[str], principal: PrincipalDep, services: ServicesDep) -> Device:
-        return services.accounts.revoke_device(principal, device_id)
+    def revoke(self, device_id: FromPath[str], request: AuthedRequest, services: ServicesDep) -> Device:
+        return services.accounts.revoke_device(request.user, device_id)
 
     @get("/audit", sync_to_thread=False, summary="Audit entries after a sequence number")
     def audit_entries(
-        self, principal: PrincipalDep, services: ServicesDep,
+        self, request: AuthedRequest, services: ServicesDep,
         after: Annotated[int, QueryParameter(ge=0, description="Last sequence number already read")] = 0,
         limit: Annotated[int, QueryParameter(ge=1, le=1000)] = 200,
     ) -> list[AuditEntry]:  # fmt: skip
-        return audit_trail.list_entries(services.db, principal, after, limit)
+        return audit_trail.list_entries(services.db, request.user, after, limit)
 
     @get("/audit/verify", sync_to_thread=True, summary="Check the audit hash chain; names the first broken entry")
-    def audit_verify(self, principal: PrincipalDep, services: ServicesDep) -> AuditVerification:
-        return audit_trail.verify(services.db, principal)
+    def audit_verify(self, request: AuthedRequest, services: ServicesDep) -> AuditVerification:
+        return audit_trail.verify(services.db, request.user)

@@ -8,7 +8,7 @@ from litestar import Controller, Response, delete, get, post, put
 from litestar.params import FromPath, FromQuery, HeaderParameter, JSONBody, QueryParameter
 
 from gateway.controllers.common import outcome_response, parse_version, record_response
-from gateway.dependencies import PrincipalDep, ServicesDep
+from gateway.dependencies import AuthedRequest, ServicesDep
 from schemas.patient import Encounter, Patient
 from schemas.records import Record, RecordHistory, RecordKind
 
@@ -23,43 +23,43 @@ class PatientController(Controller):
     tags = ["patients"]
 
     @post("/", sync_to_thread=True, summary="Create a patient (the phone makes the id; retrying is safe)")
-    def create(self, data: JSONBody[Patient], principal: PrincipalDep, services: ServicesDep) -> Response[Record]:
-        return outcome_response(services.records.create(principal, RecordKind.patient, data.id, data))
+    def create(self, data: JSONBody[Patient], request: AuthedRequest, services: ServicesDep) -> Response[Record]:
+        return outcome_response(services.records.create(request.user, RecordKind.patient, data.id, data))
 
     @get("/", sync_to_thread=False, summary="List patients")
     def list_(
-        self, principal: PrincipalDep, services: ServicesDep, include_deleted: FromQuery[bool] = False,
+        self, request: AuthedRequest, services: ServicesDep, include_deleted: FromQuery[bool] = False,
         limit: Limit = 100, offset: Offset = 0,
     ) -> list[Record]:  # fmt: skip
-        return services.records.list(principal, RecordKind.patient, include_deleted=include_deleted,
+        return services.records.list(request.user, RecordKind.patient, include_deleted=include_deleted,
                                      limit=limit, offset=offset)  # fmt: skip
 
     @get("/{patient_id:str}", sync_to_thread=False, summary="Read a patient")
-    def read(self, patient_id: FromPath[str], principal: PrincipalDep, services: ServicesDep) -> Response[Record]:
-        return record_response(services.records.get(principal, RecordKind.patient, patient_id))
+    def read(self, patient_id: FromPath[str], request: AuthedRequest, services: ServicesDep) -> Response[Record]:
+        return record_response(services.records.get(request.user, RecordKind.patient, patient_id))
 
     @put("/{patient_id:str}", sync_to_thread=True, summary="Update a patient (If-Match required)")
-    def update(self, patient_id: FromPath[str], data: JSONBody[Patient], principal: PrincipalDep, services: ServicesDep,
+    def update(self, patient_id: FromPath[str], data: JSONBody[Patient], request: AuthedRequest, services: ServicesDep,
                if_match: IfMatch = None) -> Response[Record]:  # fmt: skip
         version = parse_version(if_match, action="updating a patient")
-        return outcome_response(services.records.update(principal, RecordKind.patient, patient_id, data, version))
+        return outcome_response(services.records.update(request.user, RecordKind.patient, patient_id, data, version))
 
     @delete("/{patient_id:str}", sync_to_thread=True, status_code=200, summary="Withdraw a patient (kept in history)")
-    def withdraw(self, patient_id: FromPath[str], principal: PrincipalDep, services: ServicesDep, reason: Reason,
+    def withdraw(self, patient_id: FromPath[str], request: AuthedRequest, services: ServicesDep, reason: Reason,
                  if_match: IfMatch = None) -> Response[Record]:  # fmt: skip
         version = parse_version(if_match, action="withdrawing a patient")
-        return outcome_response(services.records.delete(principal, RecordKind.patient, patient_id, version, reason))
+        return outcome_response(services.records.delete(request.user, RecordKind.patient, patient_id, version, reason))
 
     @get("/{patient_id:str}/history", sync_to_thread=False, summary="Every version of a patient")
-    def history(self, patient_id: FromPath[str], principal: PrincipalDep, services: ServicesDep) -> RecordHistory:
-        versions = services.records.history(principal, RecordKind.patient, patient_id)
+    def history(self, patient_id: FromPath[str], request: AuthedRequest, services: ServicesDep) -> RecordHistory:
+        versions = services.records.history(request.user, RecordKind.patient, patient_id)
         return RecordHistory(kind=RecordKind.patient, id=patient_id, versions=versions)
 
     @get("/{patient_id:str}/encounters", sync_to_thread=False, summary="A patient's encounters")
-    def encounters(self, patient_id: FromPath[str], principal: PrincipalDep, services: ServicesDep,
+    def encounters(self, patient_id: FromPath[str], request: AuthedRequest, services: ServicesDep,
                    include_deleted: FromQuery[bool] = False) -> list[Record]:  # fmt: skip
-        services.records.get(principal, RecordKind.patient, patient_id)
-        return services.records.list(principal, RecordKind.encounter, parent_id=patient_id,
+        services.records.get(request.user, RecordKind.patient, patient_id)
+        return services.records.list(request.user, RecordKind.encounter, parent_id=patient_id,
                                      include_deleted=include_deleted, limit=10_000)  # fmt: skip
 
 
@@ -68,34 +68,38 @@ class EncounterController(Controller):
     tags = ["encounters"]
 
     @post("/", sync_to_thread=True, summary="Open an encounter for a patient")
-    def create(self, data: JSONBody[Encounter], principal: PrincipalDep, services: ServicesDep) -> Response[Record]:
-        return outcome_response(services.records.create(principal, RecordKind.encounter, data.id, data))
+    def create(self, data: JSONBody[Encounter], request: AuthedRequest, services: ServicesDep) -> Response[Record]:
+        return outcome_response(services.records.create(request.user, RecordKind.encounter, data.id, data))
 
     @get("/{encounter_id:str}", sync_to_thread=False, summary="Read an encounter")
-    def read(self, encounter_id: FromPath[str], principal: PrincipalDep, services: ServicesDep) -> Response[Record]:
-        return record_response(services.records.get(principal, RecordKind.encounter, encounter_id))
+    def read(self, encounter_id: FromPath[str], request: AuthedRequest, services: ServicesDep) -> Response[Record]:
+        return record_response(services.records.get(request.user, RecordKind.encounter, encounter_id))
 
     @put("/{encounter_id:str}", sync_to_thread=True, summary="Update an encounter (If-Match required)")
-    def update(self, encounter_id: FromPath[str], data: JSONBody[Encounter], principal: PrincipalDep, services: ServicesDep,
+    def update(self, encounter_id: FromPath[str], data: JSONBody[Encounter], request: AuthedRequest, services: ServicesDep,
                if_match: IfMatch = None) -> Response[Record]:  # fmt: skip
         version = parse_version(if_match, action="updating an encounter")
-        return outcome_response(services.records.update(principal, RecordKind.encounter, encounter_id, data, version))
+        return outcome_response(
+            services.records.update(request.user, RecordKind.encounter, encounter_id, data, version)
+        )
 
     @delete("/{encounter_id:str}", sync_to_thread=True, status_code=200, summary="Withdraw an encounter")
-    def withdraw(self, encounter_id: FromPath[str], principal: PrincipalDep, services: ServicesDep, reason: Reason,
+    def withdraw(self, encounter_id: FromPath[str], request: AuthedRequest, services: ServicesDep, reason: Reason,
                  if_match: IfMatch = None) -> Response[Record]:  # fmt: skip
         version = parse_version(if_match, action="withdrawing an encounter")
-        return outcome_response(services.records.delete(principal, RecordKind.encounter, encounter_id, version, reason))
+        return outcome_response(
+            services.records.delete(request.user, RecordKind.encounter, encounter_id, version, reason)
+        )
 
     @get("/{encounter_id:str}/history", sync_to_thread=False, summary="Every version of an encounter")
-    def history(self, encounter_id: FromPath[str], principal: PrincipalDep, services: ServicesDep) -> RecordHistory:
-        versions = services.records.history(principal, RecordKind.encounter, encounter_id)
+    def history(self, encounter_id: FromPath[str], request: AuthedRequest, services: ServicesDep) -> RecordHistory:
+        versions = services.records.history(request.user, RecordKind.encounter, encounter_id)
         return RecordHistory(kind=RecordKind.encounter, id=encounter_id, versions=versions)
 
     @get("/{encounter_id:str}/record", sync_to_thread=False, summary="The encounter with every part and its assessment")
     def full_record(
-        self, encounter_id: FromPath[str], principal: PrincipalDep, services: ServicesDep
+        self, encounter_id: FromPath[str], request: AuthedRequest, services: ServicesDep
     ) -> dict[str, Record]:
-        encounter = services.records.get(principal, RecordKind.encounter, encounter_id)
-        parts = services.records.encounter_parts(principal, encounter_id)
+        encounter = services.records.get(request.user, RecordKind.encounter, encounter_id)
+        parts = services.records.encounter_parts(request.user, encounter_id)
         return {"encounter": encounter, **{kind.value: record for kind, record in parts.items()}}

@@ -7,7 +7,7 @@ from typing import Annotated
 from litestar import Controller, get, post
 from litestar.params import JSONBody, QueryParameter
 
-from gateway.dependencies import PrincipalDep, ServicesDep
+from gateway.dependencies import AuthedRequest, ServicesDep
 from schemas.sync import ChangesPage, PushRequest, PushResponse
 
 
@@ -17,12 +17,12 @@ class SyncController(Controller):
 
     @get("/changes", sync_to_thread=False, summary="Record versions after a cursor, oldest first")
     def changes(
-        self, principal: PrincipalDep, services: ServicesDep,
+        self, request: AuthedRequest, services: ServicesDep,
         since: Annotated[int, QueryParameter(ge=0, description="next_cursor of the previous page")] = 0,
         limit: Annotated[int, QueryParameter(ge=1, description="Page size (capped by the gateway)")] = 200,
     ) -> ChangesPage:  # fmt: skip
-        return services.phone_sync.changes(principal, since, limit)
+        return services.phone_sync.changes(request.user, since, limit)
 
     @post("/push", sync_to_thread=True, status_code=200, summary="Apply queued mutations; safe to retry")
-    def push(self, data: JSONBody[PushRequest], principal: PrincipalDep, services: ServicesDep) -> PushResponse:
-        return services.phone_sync.push(principal, data.mutations)
+    def push(self, data: JSONBody[PushRequest], request: AuthedRequest, services: ServicesDep) -> PushResponse:
+        return services.phone_sync.push(request.user, data.mutations)

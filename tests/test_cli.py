@@ -1,0 +1,77 @@
+"""The command line: every command documented, schemas exported, users created, demo seeded."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import msgspec
+import pytest
+
+from gateway.cli import build_parser
+from schemas.export import public_messages
+from tests.conftest import REPO
+
+
+def _commands(parser, prefix=()) -> list[tuple[str, ...]]:
+    found = []
+    for action in parser._actions:
+        if action.__class__.__name__ == "_SubParsersAction":
+            for name, sub in action.choices.items():
+                found.append((*prefix, name))
+                found += _commands(sub, (*prefix, name))
+    return found
+
+
+@pytest.mark.parametrize("command", _commands(build_parser()), ids=" ".join)
+def test_every_cli_command_is_documented_in_the_readme(command):
+    readme = (REPO / "README.md").read_text()
+    assert f"burnedge {' '.join(command)}" in readme, f"document `burnedge {' '.join(command)}` in README.md"
+
+
+def test_schemas_export_writes_a_json_schema_per_message(tmp_path):
+    r = subprocess.run([sys.executable, "-m", "gateway.cli", "schemas", "export", str(tmp_path)], capture_output=True,
+                       text=True, cwd=REPO)  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    names = {p.stem for p in tmp_path.glob("*.json")} - {"index"}
+    for required in ("Patient", "Encounter", "Intake", "PrimarySurvey", "SecondarySurvey", "Mechanism", "BurnChart",
+                     "TbsaResult", "FluidPlan", "ReferralAssessment", "Mutation", "ChangesPage", "Problem"):  # fmt: skip
+        assert required in names
+    patient = json.loads((tmp_path / "Patient.json").read_text())
+    props = patient["$defs"]["Patient"]["properties"]
+    assert props["weight_kg"]["anyOf"][0]["exclusiveMinimum"] == 0
+    assert patient["$defs"]["Patient"]["additionalProperties"] is False
+    assert len(names) == len(public_messages())
+
+
+def test_every_public_message_round_trips_through_json():
+    for struct in public_messages():
+        schema = msgspec.json.schema(struct)
+        assert schema, struct
+
+
+def test_users_add_rejects_a_short_password(tmp_path):
+    r = subprocess.run(
+        [sys.executable, "-m", "gateway.cli", "--db", str(tmp_path / "u.sqlite3"), "users", "add", "--username",
+         "dr.a", "--role", "clinician", "--password-stdin"], input="short\n", capture_output=True, text=True, cwd=REPO,
+    )  # fmt: skip
+    assert r.returncode == 2 and "10+ characters" in r.stderr
+
+
+def test_demo_seeds_a_patient_with_calculated_results_and_is_idempotent(tmp_path):
+    db = tmp_path / "demo.sqlite3"
+    args = [sys.executable, "-m", "gateway.cli", "--db", str(db), "demo", "--no-serve"]
+    env = {
+        "BURNEDGE_SECURITY_ARGON2_MEMORY_KIB": "8",
+        "BURNEDGE_SECURITY_ARGON2_TIME_COST": "1",
+        "BURNEDGE_SECURITY_ARGON2_PARALLELISM": "1",
+        "PATH": "",
+    }
+    first = subprocess.run(args, capture_output=True, text=True, cwd=REPO, env=env)
+    assert first.returncode == 0, first.stderr
+    assert "%TBSA" in first.stdout and "Decision support" in first.stdout
+    second = subprocess.run(args, capture_output=True, text=True, cwd=REPO, env=env)
+    assert second.returncode == 0, second.stderr
+    assert first.stdout.splitlines()[1] == second.stdout.splitlines()[1]
+    assert db.with_suffix(".credentials").stat().st_mode & 0o077 == 0
