@@ -45,9 +45,9 @@ def _start(args: list[str], port: int) -> subprocess.Popen:
         try:
             httpx.get(f"http://127.0.0.1:{port}/health" if "gateway.cli" in args else f"http://127.0.0.1:{port}/bare")
             return proc
-        except httpx.HTTPError:
+        except httpx.HTTPError as exc:
             if proc.poll() is not None:
-                raise RuntimeError(proc.stderr.read().decode())
+                raise RuntimeError(proc.stderr.read().decode()) from exc
             time.sleep(0.2)
     raise RuntimeError(f"server {args} did not start")
 

@@ -15,23 +15,14 @@ from processing.clinical.bsa import mosteller
 from processing.clinical.fluids import fluid_plan
 from processing.clinical.lund_browder import check_age, compute_tbsa
 from processing.clinical.referral import ReferralInputs, assess_referral
-from schemas.burn_chart import BurnChart
 from schemas.clinical_results import Assessment, FluidPlan, InputRef, TbsaResult
 from schemas.config import ClinicalConfig
 from schemas.errors import InvalidInput
 from schemas.patient import Encounter, Patient
-from schemas.record_parts import FluidFormula, Intake, Mechanism, PrimarySurvey, Resuscitation, SecondarySurvey
-from schemas.records import RecordKind
+from schemas.record_parts import FluidFormula
+from schemas.records import RECORD_TYPES, RecordKind
 
 DAYS_PER_YEAR = 365.25
-PART_TYPES: dict[RecordKind, type[msgspec.Struct]] = {
-    RecordKind.intake: Intake,
-    RecordKind.primary_survey: PrimarySurvey,
-    RecordKind.secondary_survey: SecondarySurvey,
-    RecordKind.mechanism: Mechanism,
-    RecordKind.burn_chart: BurnChart,
-    RecordKind.resuscitation: Resuscitation,
-}
 
 MISSING_AGE = "patient's date of birth or estimated age (needed for %TBSA and the fluid plan)"
 MISSING_WEIGHT = "patient's weight in kg (needed for the fluid plan and body surface area)"
@@ -52,7 +43,7 @@ def _parts(parts: dict[RecordKind, msgspec.Struct], encounter: Encounter) -> dic
     for kind, part in parts.items():
         try:
             kind = RecordKind(kind)
-            expected = PART_TYPES[kind]
+            expected = RECORD_TYPES[kind]
         except (ValueError, KeyError):
             raise InvalidInput(f"'{kind}' is not an encounter part the calculators read") from None
         if not isinstance(part, expected):

@@ -88,6 +88,13 @@ def burned_regions(chart: BurnChart, depths: frozenset[BurnDepth]) -> list[str]:
     return [LundBrowderRegion(e.region).value for e in chart.entries if e.fraction > 0 and BurnDepth(e.depth) in depths]
 
 
+def burned_anywhere(chart: BurnChart, depths: frozenset[BurnDepth]) -> list[str]:
+    """Chart regions and special areas burned at one of these depths."""
+    return burned_regions(chart, depths) + [
+        f"{SpecialArea(s.area).value} (special area)" for s in chart.special_areas if BurnDepth(s.depth) in depths
+    ]
+
+
 def _area_hits(chart: BurnChart, area: SpecialArea, depths: frozenset[BurnDepth]) -> list[str]:
     """What shows this critical area burned at one of these depths: chart regions and special areas."""
     hits = [
@@ -140,11 +147,7 @@ def _electrical(mechanism: Mechanism) -> str | None:
 def full_thickness(inp: ReferralInputs) -> Verdict:
     if inp.chart is None:
         return None, NO_CHART
-    where = burned_regions(inp.chart, FULL) + [
-        f"{SpecialArea(s.area).value} (special area)"
-        for s in inp.chart.special_areas
-        if BurnDepth(s.depth) is BurnDepth.full_thickness
-    ]
+    where = burned_anywhere(inp.chart, FULL)
     if not where:
         return False, "no full-thickness burn charted"
     size = f" {inp.tbsa.full_thickness_percent:.2f} %TBSA" if inp.tbsa is not None else ""

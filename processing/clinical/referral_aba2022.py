@@ -35,6 +35,7 @@ from processing.clinical.referral import (
     ReferralInputs,
     Rule,
     Verdict,
+    burned_anywhere,
     burned_regions,
     chemical,
     child_status,
@@ -69,11 +70,7 @@ def partial_below_10(inp: ReferralInputs) -> Verdict:
 def potentially_deep(inp: ReferralInputs) -> Verdict:
     if inp.chart is None:
         return None, NO_CHART
-    where = burned_regions(inp.chart, DEEP_PARTIAL) + [
-        f"{SpecialArea(s.area).value} (special area)"
-        for s in inp.chart.special_areas
-        if BurnDepth(s.depth) is BurnDepth.deep_partial
-    ]
+    where = burned_anywhere(inp.chart, DEEP_PARTIAL)
     if not where:
         return False, "no deep partial-thickness burn charted (full-thickness burns are judged in the immediate tier)"
     size = f" {inp.tbsa.deep_partial_percent:.2f} %TBSA" if inp.tbsa is not None else ""
