@@ -1,6 +1,6 @@
 """Renders docs/configuration.md from the field docstrings in schemas/config.py.
 
-    .venv/bin/python -m schemas.config_docs > docs/configuration.md
+.venv/bin/python -m schemas.config_docs > docs/configuration.md
 """
 
 from __future__ import annotations

@@ -17,7 +17,9 @@ def test_every_config_field_has_a_docstring():
 
 
 def test_configuration_doc_is_current():
-    assert (REPO / "docs" / "configuration.md").read_text() == render(), "run: python -m schemas.config_docs > docs/configuration.md"
+    assert (REPO / "docs" / "configuration.md").read_text() == render(), (
+        "run: python -m schemas.config_docs > docs/configuration.md"
+    )
 
 
 def test_file_then_environment(tmp_path):
