@@ -23,12 +23,18 @@ Id = Annotated[
 ]
 # Timestamps must carry a UTC offset: a clinical time without one is ambiguous.
 Timestamp = Annotated[dt.datetime, msgspec.Meta(tz=True, description="ISO 8601 with offset.")]
+# Physiological limits: the schemas and the calculators both enforce these.
+WEIGHT_MAX_KG = 400.0
+HEIGHT_MIN_CM = 20.0
+HEIGHT_MAX_CM = 272.0
+AGE_MAX_YEARS = 130.0
+
 ShortText = Annotated[str, msgspec.Meta(max_length=200)]
 LongText = Annotated[str, msgspec.Meta(max_length=20_000)]
 Fraction = Annotated[float, msgspec.Meta(ge=0.0, le=1.0, description="0 to 1.")]
 Percent = Annotated[float, msgspec.Meta(ge=0.0, le=100.0)]
-WeightKg = Annotated[float, msgspec.Meta(gt=0.0, le=400.0, description="Body weight in kg.")]
-HeightCm = Annotated[float, msgspec.Meta(ge=20.0, le=272.0, description="Body height in cm.")]
+WeightKg = Annotated[float, msgspec.Meta(gt=0.0, le=WEIGHT_MAX_KG, description="Body weight in kg.")]
+HeightCm = Annotated[float, msgspec.Meta(ge=HEIGHT_MIN_CM, le=HEIGHT_MAX_CM, description="Body height in cm.")]
 Millilitres = Annotated[float, msgspec.Meta(ge=0.0, le=100_000.0)]
 
 

@@ -8,7 +8,7 @@ from typing import Annotated
 
 import msgspec
 
-from schemas.base import HeightCm, Id, Message, ShortText, Timestamp, WeightKg
+from schemas.base import AGE_MAX_YEARS, HeightCm, Id, Message, ShortText, Timestamp, WeightKg
 
 
 class Sex(enum.StrEnum):
@@ -33,7 +33,7 @@ class Patient(Message):
     given_name: ShortText = ""
     family_name: ShortText = ""
     date_of_birth: dt.date | None = None
-    age_estimate_years: Annotated[float, msgspec.Meta(ge=0, le=130)] | None = None
+    age_estimate_years: Annotated[float, msgspec.Meta(ge=0, le=AGE_MAX_YEARS)] | None = None
     """Used when the date of birth is unknown (common in field clinics)."""
     sex: Sex = Sex.unknown
     weight_kg: WeightKg | None = None
