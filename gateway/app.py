@@ -19,15 +19,9 @@ from gateway.errors import EXCEPTION_HANDLERS
 from gateway.storage.database import Database
 from schemas.config import Config
 
-MAX_JSON_BODY = 4 * 1024 * 1024
-
 
 def create_app(config: Config) -> Litestar:
-    db = Database(
-        config.gateway.database,
-        synchronous=config.gateway.sqlite_synchronous,
-        busy_timeout_ms=config.gateway.busy_timeout_ms,
-    )
+    db = Database.from_config(config.gateway)
     db.migrate()
     services = Services.build(config, db)
     return Litestar(
@@ -54,5 +48,5 @@ def create_app(config: Config) -> Litestar:
         ),
         state=State({"services": services}),
         on_shutdown=[db.close],
-        request_max_body_size=MAX_JSON_BODY,
+        request_max_body_size=config.gateway.max_body_bytes,
     )

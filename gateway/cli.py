@@ -43,9 +43,13 @@ def cmd_serve(args: argparse.Namespace) -> int:
 
 
 def cmd_demo(args: argparse.Namespace) -> int:
-    from gateway.demo import run_demo
+    from gateway.demo import demo_config, seed_demo
+    from gateway.server import serve
 
-    run_demo(_config(args), serve_after=not args.no_serve)
+    config = demo_config(_config(args))
+    print(seed_demo(config), flush=True)
+    if not args.no_serve:
+        serve(config)
     return 0
 
 
@@ -56,7 +60,7 @@ def cmd_users_add(args: argparse.Namespace) -> int:
 
     config = _config(args)
     password = sys.stdin.readline().rstrip("\n") if args.password_stdin else getpass.getpass("Password: ")
-    db = Database(config.gateway.database, synchronous=config.gateway.sqlite_synchronous)
+    db = Database.from_config(config.gateway)
     try:
         db.migrate()
         body = msgspec.convert(
@@ -80,7 +84,7 @@ def cmd_audit_verify(args: argparse.Namespace) -> int:
     config = _config(args)
     if not Path(config.gateway.database).exists():
         raise NotFound(f"no database at {config.gateway.database}")
-    db = Database(config.gateway.database)
+    db = Database.from_config(config.gateway)
     try:
         result = verify(db, None)
     finally:

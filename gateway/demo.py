@@ -6,7 +6,7 @@ Seeding is idempotent: running the demo again reuses what the database already h
 from __future__ import annotations
 
 import datetime as dt
-import logging
+import os
 import secrets
 from pathlib import Path
 
@@ -36,22 +36,24 @@ from schemas.record_parts import (
 )  # fmt: skip
 from schemas.records import RecordKind
 
-log = logging.getLogger("burnedge.demo")
 DEMO_PATIENT_ID = "0192f3b4-6a8e-7c3d-9b1a-2f4e5d6c7b8a"
 DEMO_ENCOUNTER_ID = "0192f3b4-6a8f-7000-8000-00000000e001"
 DEMO_USERS = {"admin": Role.admin, "clinician": Role.clinician, "nurse": Role.nurse, "consultant": Role.consultant}
 
 
 def seed_accounts(services: Services, credentials_file: Path) -> dict[str, str]:
-    """Create the demo accounts once; their random passwords go to a file only root can read."""
-    if credentials_file.exists():
+    """Create the demo accounts once; their random passwords go to a file only its owner can read."""
+    conn = services.db.connection()
+    if credentials_file.exists() and conn.execute("SELECT 1 FROM users WHERE username = 'clinician'").fetchone():
         return dict(line.split(" ", 1) for line in credentials_file.read_text().split("\n") if line)
     passwords = {name: secrets.token_urlsafe(12) for name in DEMO_USERS}
     for name, role in DEMO_USERS.items():
         services.accounts.create_user(None, UserCreate(username=name, password=passwords[name], role=role,
                                                        display_name=f"Demo {role.value}"))  # fmt: skip
-    credentials_file.write_text("".join(f"{name} {pw}\n" for name, pw in passwords.items()))
-    credentials_file.chmod(0o600)
+    credentials_file.unlink(missing_ok=True)
+    fd = os.open(credentials_file, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
+    with os.fdopen(fd, "w") as f:
+        f.write("".join(f"{name} {pw}\n" for name, pw in passwords.items()))
     return passwords
 
 
@@ -59,7 +61,7 @@ def seed_patient(services: Services) -> None:
     conn = services.db.connection()
     row = conn.execute("SELECT id FROM users WHERE username = 'clinician'").fetchone()
     who = Principal(row["id"], "clinician", Role.clinician, None, "demo-seed")
-    if services.records.list(who, RecordKind.patient, limit=1):
+    if services.records.list_records(who, RecordKind.patient, limit=1):
         return
     now = utcnow().replace(microsecond=0)
     injury = now - dt.timedelta(hours=2)
@@ -95,26 +97,30 @@ def seed_patient(services: Services) -> None:
         services.records.create(who, kind, record_id, struct)
 
 
-def run_demo(config: Config, *, serve_after: bool) -> None:
-    if config.gateway.database == Config().gateway.database:
-        config = msgspec.structs.replace(
-            config, gateway=msgspec.structs.replace(config.gateway, database="burnedge-demo.sqlite3")
-        )
+def demo_config(config: Config) -> Config:
+    """The demo keeps its own database unless one was named."""
+    if config.gateway.database != Config().gateway.database:
+        return config
+    return msgspec.structs.replace(
+        config, gateway=msgspec.structs.replace(config.gateway, database="burnedge-demo.sqlite3")
+    )
+
+
+def seed_demo(config: Config) -> str:
+    """Seed accounts and the demo patient (idempotent); return the summary to show."""
     db_path = Path(config.gateway.database).resolve()
-    db = Database(db_path, synchronous=config.gateway.sqlite_synchronous)
-    db.migrate()
-    services = Services.build(config, db)
-    passwords = seed_accounts(services, db_path.with_suffix(".credentials"))
-    seed_patient(services)
-    _print_summary(services, config, passwords, db_path)
-    db.close()
-    if serve_after:
-        from gateway.server import serve
-
-        serve(config)
+    db = Database.from_config(config.gateway)
+    try:
+        db.migrate()
+        services = Services.build(config, db)
+        passwords = seed_accounts(services, db_path.with_suffix(".credentials"))
+        seed_patient(services)
+        return _summary(services, config, passwords, db_path)
+    finally:
+        db.close()
 
 
-def _print_summary(services: Services, config: Config, passwords: dict[str, str], db_path: Path) -> None:
+def _summary(services: Services, config: Config, passwords: dict[str, str], db_path: Path) -> str:
     who = Principal("demo", "clinician", Role.clinician, None, "demo")
     result = services.records.get(who, RecordKind.assessment, DEMO_ENCOUNTER_ID).data
     tbsa, fluids, referral = result["tbsa"], result["fluids"], result["referral"]
@@ -134,4 +140,4 @@ def _print_summary(services: Services, config: Config, passwords: dict[str, str]
         f"Try: curl -s -X POST {base}/api/v1/auth/login -H 'content-type: application/json'"
         f' -d \'{{"username":"clinician","password":"{passwords["clinician"]}"}}\'',
     ]
-    print("\n".join(lines), flush=True)
+    return "\n".join(lines)

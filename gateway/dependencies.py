@@ -32,7 +32,7 @@ class Services:
             db=db,
             accounts=AccountService(db, config.security),
             records=records,
-            phone_sync=PhoneSync(records, config.gateway.changes_page_max),
+            phone_sync=PhoneSync(records, config.gateway.page_max),
         )
 
 

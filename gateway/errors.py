@@ -8,6 +8,7 @@ form; anything unexpected is logged and answered 500 without internals.
 from __future__ import annotations
 
 import logging
+import re
 from http import HTTPStatus
 
 from litestar import Request, Response
@@ -43,17 +44,28 @@ def burnedge_error(request: Request, exc: BurnedgeError) -> Response:
 
 def validation_error(request: Request, exc: ValidationException) -> Response:
     """Body or parameter failed to decode: wrong type, unknown field, out of range, bad JSON."""
-    errors = []
-    for item in exc.extra if isinstance(exc.extra, list) else []:
-        if isinstance(item, dict):
-            key = item.get("key") or item.get("source") or "$"
-            errors.append(FieldProblem(field=str(key), message=str(item.get("message", ""))))
+    errors = [
+        FieldProblem(field=_json_path(item), message=str(item.get("message", "")))
+        for item in (exc.extra if isinstance(exc.extra, list) else [])
+        if isinstance(item, dict)
+    ]
     detail = "; ".join(f"{e.field}: {e.message}" for e in errors) or exc.detail
     problem = Problem(
         type=_TYPE_BASE + "validation", title="Request not valid", status=400,
         detail=f"nothing was stored: {detail}", instance=request.url.path, errors=errors,
     )  # fmt: skip
     return _respond(problem)
+
+
+_UNKNOWN_FIELD = re.compile(r"unknown field `([^`]+)`")
+
+
+def _json_path(item: dict) -> str:
+    """Litestar reports "weight_kg", "entries[1].fraction" or "data" (the body); answer in JSON paths."""
+    key = str(item.get("key") or "")
+    path = "$" if key in ("", "data") else f"$.{key}"
+    unknown = _UNKNOWN_FIELD.search(str(item.get("message", "")))
+    return f"{path}.{unknown.group(1)}" if unknown else path
 
 
 def http_error(request: Request, exc: HTTPException) -> Response:

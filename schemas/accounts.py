@@ -89,3 +89,10 @@ class Identity(Frozen):
     username: str
     role: Role
     device_id: str | None
+
+
+class Health(Frozen):
+    """GET /health: whether the gateway is up and its database answers."""
+
+    status: str
+    version: str

@@ -17,6 +17,8 @@ class AuditEntry(Frozen):
     before_version: int | None
     after_version: int | None
     detail: str
+    content_hash: str | None
+    """SHA-256 of the record version written (data, withdrawn flag, reason), when the entry records one."""
     prev_hash: str
     hash: str
 

@@ -48,3 +48,8 @@ class Frozen(Message, frozen=True):
 
 def utcnow() -> dt.datetime:
     return dt.datetime.now(dt.UTC)
+
+
+def iso(t: dt.datetime) -> str:
+    """The one text form of a stored timestamp: ISO 8601, microseconds, with offset."""
+    return t.isoformat(timespec="microseconds")

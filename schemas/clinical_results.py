@@ -3,12 +3,16 @@
 from __future__ import annotations
 
 import enum
+from typing import Literal
 
 from schemas.base import Frozen, Id, Timestamp
 from schemas.burn_chart import BurnDepth, LundBrowderRegion
 from schemas.record_parts import FluidFormula
 
 DECISION_SUPPORT_NOTICE = "Decision support only: a clinician must confirm every figure and decision."
+
+AgeSource = Literal["date_of_birth", "estimate"]
+"""Where a calculator's age came from: the date of birth, or the recorded estimate."""
 
 
 class RegionContribution(Frozen):
@@ -32,6 +36,8 @@ class TbsaResult(Frozen):
     partial_thickness_percent: float
     excluded_superficial_percent: float
     age_years: float
+    age_source: AgeSource
+    """Where age_years came from: "date_of_birth" or "estimate" (the chart column depends on it)."""
     age_adjustment: str
     """Which chart column(s) were used and how, e.g. "band: column 5 years"."""
     rule_of_nines_percent: float
@@ -76,6 +82,9 @@ class FluidPlan(Frozen):
     multiplier_basis: str
     """Why this multiplier (always shown to the clinician)."""
     weight_kg: float
+    weight_source: str
+    """How the weight was obtained and from which record, e.g. "measured, encounter",
+    "estimated, patient record", "not recorded, patient record". Volumes scale with the weight."""
     tbsa_percent: float
     total_24h_ml: float
     first_8h_ml: float
@@ -152,4 +161,13 @@ class Assessment(Frozen):
     referral: ReferralAssessment | None
     missing: list[str]
     """What the record lacks for the calculators that did not run."""
+    calculator_errors: list[str]
+    """Calculators that could not run on the data recorded, and why, e.g. "fluid plan: custom fluid
+    formula chosen but ...". The other calculators still ran; correct the data named."""
+    provenance: list[str]
+    """Where each input came from, e.g. "age 34.2 y from date of birth 1991-04-12 at the time of
+    injury", "weight 62 kg measured, from the patient record"."""
+    caveats: list[str]
+    """Limits of this assessment a clinician should weigh, e.g. "weight was estimated: fluid
+    volumes are only as good as the weight"."""
     notice: str = DECISION_SUPPORT_NOTICE

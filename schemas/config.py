@@ -29,8 +29,10 @@ class GatewayConfig(Message):
     """FULL survives power cuts without losing a committed write; NORMAL is faster and may lose the last commits."""
     busy_timeout_ms: Annotated[int, msgspec.Meta(ge=0)] = 10_000
     """How long a writer waits for another writer before reporting storage busy."""
-    changes_page_max: Annotated[int, msgspec.Meta(ge=1)] = 500
-    """Largest change-feed page a client may ask for."""
+    page_max: Annotated[int, msgspec.Meta(ge=1)] = 500
+    """Largest page a client may ask for (record lists and the change feed); larger requests get this many."""
+    max_body_bytes: Annotated[int, msgspec.Meta(ge=1024)] = 32 * 1024 * 1024
+    """Largest JSON request body; a full sync push of 1000 mutations fits in the default."""
     clock_skew_s: Annotated[int, msgspec.Meta(ge=0)] = 300
     """Tolerance for clinical times slightly in the future (phone clocks drift)."""
 
@@ -46,10 +48,12 @@ class SecurityConfig(Message):
     """Argon2id memory per hash in KiB (64 MiB: memory-hard yet fine on a 2-core mini-PC)."""
     argon2_parallelism: Annotated[int, msgspec.Meta(ge=1)] = 2
     """Argon2id lanes."""
+    argon2_max_concurrent: Annotated[int, msgspec.Meta(ge=1)] = 2
+    """Password hashes computed at once; more logins wait (bounds CPU and memory under a login flood)."""
     login_free_failures: Annotated[int, msgspec.Meta(ge=1)] = 5
     """Failed logins allowed per account or address in the window before slowing down."""
     login_failure_window_s: Annotated[int, msgspec.Meta(ge=1)] = 900
-    """Window in which failed logins are counted."""
+    """A key's count of failed attempts is forgotten after this long without a new attempt."""
     login_base_delay_s: Annotated[int, msgspec.Meta(ge=1)] = 2
     """First lock-out after the free failures; doubles with each further failure."""
     login_max_delay_s: Annotated[int, msgspec.Meta(ge=1)] = 900
@@ -62,7 +66,7 @@ class SecurityConfig(Message):
 
 class ClinicalConfig(Message):
     child_max_age_years: float = 14.0
-    """Patients at or below this age are children for fluids and referral (ABA/ABLS pediatric)."""
+    """Patients of at most this many completed years are children (ABLS/ABA "14 years or younger": until the 15th birthday)."""
     child_max_weight_kg: float = 30.0
     """Patients below this weight are treated as children too (ABA 2022: <30 kg)."""
     formal_resuscitation_adult_percent: float = 20.0

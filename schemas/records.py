@@ -6,7 +6,7 @@ import enum
 
 import msgspec
 
-from schemas.base import Frozen, Id, Message, ShortText, Timestamp
+from schemas.base import Frozen, Id, ShortText, Timestamp
 from schemas.burn_chart import BurnChart
 from schemas.clinical_results import Assessment
 from schemas.patient import Encounter, Patient
@@ -24,6 +24,11 @@ class RecordKind(enum.StrEnum):
     resuscitation = "resuscitation"
     assessment = "assessment"
     """Calculator results; written by the server only."""
+
+    @property
+    def label(self) -> str:
+        """How people say it: "burn chart", "primary survey"."""
+        return self.value.replace("_", " ")
 
 
 RECORD_TYPES: dict[RecordKind, type[msgspec.Struct]] = {
@@ -80,6 +85,9 @@ class RecordHistory(Frozen):
     versions: list[Record]
 
 
-class DeleteRequest(Message):
-    reason: ShortText
-    """Why the record is withdrawn (kept in the history and the audit trail)."""
+class EncounterRecord(Frozen):
+    """An encounter and every part of its record, read in one snapshot."""
+
+    encounter: Record
+    parts: dict[RecordKind, Record]
+    """The current version of each part recorded so far, the calculator results included."""

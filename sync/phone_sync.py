@@ -8,12 +8,14 @@ Each mutation stands alone: a conflict or a rejected item does not undo the othe
 
 from __future__ import annotations
 
+import hashlib
+
 import msgspec
 
-from gateway.services.permissions import Principal, readable_kinds
+from gateway.services.permissions import Principal, readable_kinds, require_delete, require_write
 from gateway.services.records import RecordService
-from gateway.storage import records as rows
-from schemas.base import utcnow
+from gateway.storage import records as store
+from schemas.base import iso, utcnow
 from schemas.errors import BurnedgeError, Conflict, InvalidInput, VersionMismatch
 from schemas.sync import ChangesPage, Mutation, MutationOp, MutationResult, MutationStatus, PushResponse
 
@@ -31,7 +33,7 @@ class PhoneSync:
         limit = max(1, min(limit, self.page_max))
         kinds = readable_kinds(principal)
         conn = self.records.db.connection()
-        page = rows.changes_since(conn, since, limit + 1, kinds) if kinds else []
+        page = store.changes_since(conn, since, limit + 1, kinds) if kinds else []
         has_more = len(page) > limit
         page = page[:limit]
         next_cursor = page[-1].meta.seq if page else since
@@ -42,16 +44,17 @@ class PhoneSync:
         db = self.records.db
         with db.write() as conn:
             for mutation in mutations:
+                fingerprint = _fingerprint(mutation)
                 stored = conn.execute(
-                    "SELECT result FROM applied_mutations WHERE mutation_id = ?", (mutation.mutation_id,)
+                    "SELECT fingerprint, result FROM applied_mutations WHERE mutation_id = ?", (mutation.mutation_id,)
                 ).fetchone()
-                if stored is not None:
-                    results.append(msgspec.structs.replace(_result_decoder.decode(stored["result"]), replayed=True))
-                    continue
                 try:
+                    if stored is not None:
+                        results.append(self._replay(principal, mutation, fingerprint, stored))
+                        continue
                     with db.savepoint(conn):
                         result = self._apply(conn, principal, mutation)
-                        self._remember(conn, principal, result)
+                        self._remember(conn, principal, fingerprint, result)
                 except BurnedgeError as exc:
                     # Not remembered: a retry re-evaluates it (its parent may have arrived meanwhile).
                     result = _failure(mutation, exc)
@@ -63,6 +66,18 @@ class PhoneSync:
             conflicts=counts[MutationStatus.conflict],
             rejected=counts[MutationStatus.rejected],
         )
+
+    def _replay(self, principal: Principal, m: Mutation, fingerprint: str, stored) -> MutationResult:
+        """The stored outcome of a mutation seen before, if it really is the same mutation."""
+        if stored["fingerprint"] != fingerprint:
+            raise InvalidInput(
+                f"mutation_id {m.mutation_id} was already used for a different change: give each change its own id"
+            )
+        if m.op is MutationOp.delete:
+            require_delete(principal, m.kind)
+        else:
+            require_write(principal, m.kind)
+        return msgspec.structs.replace(_result_decoder.decode(stored["result"]), replayed=True)
 
     def _apply(self, conn, principal: Principal, m: Mutation) -> MutationResult:
         svc = self.records
@@ -76,11 +91,16 @@ class PhoneSync:
             mutation_id=m.mutation_id, status=MutationStatus.applied, version=outcome.record.meta.version
         )
 
-    def _remember(self, conn, principal: Principal, result: MutationResult) -> None:
+    def _remember(self, conn, principal: Principal, fingerprint: str, result: MutationResult) -> None:
         conn.execute(
-            "INSERT INTO applied_mutations (mutation_id, result, applied_at, user_id) VALUES (?,?,?,?)",
-            (result.mutation_id, msgspec.json.encode(result).decode(), utcnow().isoformat(), principal.user_id),
+            "INSERT INTO applied_mutations (mutation_id, fingerprint, result, applied_at, user_id) VALUES (?,?,?,?,?)",
+            (result.mutation_id, fingerprint, msgspec.json.encode(result).decode(), iso(utcnow()), principal.user_id),
         )
+
+
+def _fingerprint(m: Mutation) -> str:
+    """What makes two pushes the same mutation: everything but the phone's clock."""
+    return hashlib.sha256(msgspec.json.encode(msgspec.structs.replace(m, client_time=None))).hexdigest()
 
 
 def _require_data(m: Mutation) -> dict:

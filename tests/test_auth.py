@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 import re
+import threading
 
 import pytest
 
 from schemas.accounts import Role
+from schemas.errors import AuthenticationFailed, TooManyAttempts
 from schemas.ids import uuid7
 from tests.conftest import PASSWORD, encounter_body, login, make_user, now, patient_body
 
@@ -92,8 +94,9 @@ def test_pairing_code_is_single_use_and_gives_a_device_token(client, auth):
     assert re.fullmatch(r"[A-Z2-9]{4}-[A-Z2-9]{4}", code)
     assert client.post("/api/v1/auth/pair", json={"code": code}).status_code == 201
     again = client.post("/api/v1/auth/pair", json={"code": code})
-    assert again.status_code == 401 and "already used" in again.json()["detail"]
-    assert client.post("/api/v1/auth/pair", json={"code": "ABCD-EFGH"}).status_code == 401
+    wrong = client.post("/api/v1/auth/pair", json={"code": "ABCD-EFGH"})
+    assert again.status_code == wrong.status_code == 401
+    assert again.json()["detail"] == wrong.json()["detail"]  # nothing to learn about which codes exist
     devices = client.get("/api/v1/admin/devices", headers=admin).json()
     assert [d["name"] for d in devices] == ["bay 3"]
 
@@ -102,7 +105,7 @@ def test_expired_pairing_code_is_refused(client, auth, services):
     code = client.post("/api/v1/admin/pairing-codes", json={"device_name": "old"}, headers=auth["admin"]).json()["code"]
     services.db.connection().execute("UPDATE pairing_codes SET expires_at = '2000-01-01T00:00:00+00:00'")
     r = client.post("/api/v1/auth/pair", json={"code": code})
-    assert r.status_code == 401 and "expired" in r.json()["detail"]
+    assert r.status_code == 401 and "not valid" in r.json()["detail"]
 
 
 def test_a_revoked_device_token_stops_working_at_once(client, auth):
@@ -174,3 +177,114 @@ def test_unknown_user_fails_like_a_wrong_password(client):
 @pytest.mark.parametrize("role", list(Role))
 def test_me_reports_the_role(client, auth, role):
     assert client.get("/api/v1/auth/me", headers=auth[role.value]).json()["role"] == role.value
+
+
+def test_parallel_guesses_cannot_slip_past_the_throttle(services):
+    make_user(services, "racer", Role.clinician)
+    free = services.config.security.login_free_failures
+    barrier = threading.Barrier(16)
+    outcomes: list[str] = []
+
+    def guess() -> None:
+        barrier.wait()
+        try:
+            services.accounts.login("racer", "not the password", client="10.0.0.9", device_token=None)
+        except AuthenticationFailed:
+            outcomes.append("checked")
+        except TooManyAttempts:
+            outcomes.append("throttled")
+
+    threads = [threading.Thread(target=guess) for _ in range(16)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert outcomes.count("checked") <= free + 1
+    assert outcomes.count("throttled") >= 16 - free - 1
+
+
+def test_failed_logins_keep_counting_while_attempts_continue(client, services):
+    make_user(services, "slow", Role.nurse)
+    conn = services.db.connection()
+    for _ in range(services.config.security.login_free_failures + 2):
+        conn.execute("UPDATE login_throttle SET locked_until = NULL")
+        client.post("/api/v1/auth/login", json={"username": "slow", "password": "not the password"})
+    # an attacker who waits out each lock does not get a fresh count
+    failures = conn.execute("SELECT failures FROM login_throttle WHERE key = 'user:slow'").fetchone()[0]
+    assert failures == services.config.security.login_free_failures + 2
+
+
+def test_a_good_login_from_a_shared_address_does_not_lock_it(client, services):
+    make_user(services, "ward.a", Role.nurse)
+    for _ in range(services.config.security.login_free_failures + 3):
+        login(client, "ward.a")  # a busy clinic behind one address
+
+
+def test_failed_login_audit_does_not_keep_what_was_typed(client, services):
+    client.post("/api/v1/auth/login", json={"username": "MySecretPassw0rd", "password": "x"})
+    details = [r[0] for r in services.db.connection().execute("SELECT detail FROM audit_log")]
+    assert "unknown username" in details and not any("MySecretPassw0rd" in d for d in details)
+
+
+def test_an_expired_session_is_refused(client, auth, services):
+    services.db.connection().execute("UPDATE sessions SET expires_at = '2000-01-01T00:00:00+00:00'")
+    r = client.get("/api/v1/patients", headers=auth["clinician"])
+    assert r.status_code == 401 and "expired" in r.json()["detail"]
+
+
+def test_a_disabled_account_is_locked_out_at_once(client, auth, services):
+    admin = auth["admin"]
+    nurse_id = client.get("/api/v1/auth/me", headers=auth["nurse"]).json()["user_id"]
+    r = client.post(f"/api/v1/admin/users/{nurse_id}/disable", headers=admin)
+    assert r.status_code == 200 and r.json()["active"] is False
+    assert client.get("/api/v1/patients", headers=auth["nurse"]).status_code == 401
+    refused = client.post("/api/v1/auth/login", json={"username": "nurse", "password": PASSWORD})
+    assert refused.status_code == 401 and "disabled" in refused.json()["detail"]
+    assert client.post(f"/api/v1/admin/users/{nurse_id}/enable", headers=admin).status_code == 200
+    login(client, "nurse")
+    admin_id = client.get("/api/v1/auth/me", headers=admin).json()["user_id"]
+    assert client.post(f"/api/v1/admin/users/{admin_id}/disable", headers=admin).status_code == 409
+
+
+def test_pairing_attempts_are_throttled(client, services):
+    for _ in range(services.config.security.login_free_failures + 1):
+        assert client.post("/api/v1/auth/pair", json={"code": "WXYZ-2345"}).status_code == 401
+    assert client.post("/api/v1/auth/pair", json={"code": "WXYZ-2345"}).status_code == 429
+
+
+def _valid_body(path: str, record_id: str) -> dict | None:
+    t = now().isoformat()
+    part = path.rsplit("/", 1)[-1]
+    bodies = {
+        "intake": {"encounter_id": record_id}, "resuscitation": {"encounter_id": record_id},
+        "primary-survey": {"encounter_id": record_id, "assessed_at": t},
+        "secondary-survey": {"encounter_id": record_id, "assessed_at": t},
+        "burn-chart": {"encounter_id": record_id, "assessed_at": t},
+        "mechanism": {"encounter_id": record_id, "type": "scald"},
+    }  # fmt: skip
+    if part in bodies:
+        return bodies[part]
+    if path.startswith("/api/v1/patients"):
+        return patient_body(record_id)
+    if path.startswith("/api/v1/encounters") and part not in ("assessment",):
+        return encounter_body(uuid7(), record_id)
+    return None
+
+
+def test_an_administrator_is_refused_every_clinical_route(app, client, auth):
+    checked = 0
+    for route in app.routes:
+        if not route.path.startswith(("/api/v1/patients", "/api/v1/encounters")):
+            continue
+        for method in sorted(route.methods - {"OPTIONS", "HEAD"}):
+            record_id = uuid7()
+            path = re.sub(r"\{[^}]+\}", record_id, route.path)
+            body = _valid_body(route.path, record_id) if method in ("POST", "PUT") else None
+            params = {"reason": "x"} if method == "DELETE" else None
+            r = client.request(method, path, json=body, params=params, headers={**auth["admin"], "If-Match": '"1"'})
+            assert r.status_code == 403, f"{method} {route.path}: {r.status_code} {r.text[:200]}"
+            checked += 1
+    assert checked >= 25
+    push = {"mutations": [{"mutation_id": uuid7(), "kind": "patient", "id": (pid := uuid7()), "op": "create",
+                           "data": patient_body(pid)}]}  # fmt: skip
+    assert client.post("/api/v1/sync/push", json=push, headers=auth["admin"]).json()["rejected"] == 1

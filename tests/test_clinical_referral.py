@@ -73,7 +73,7 @@ def inputs(
     return ReferralInputs(
         age_years=age,
         weight_kg=weight,
-        tbsa=compute_tbsa(c, age) if c is not None and age is not None else None,
+        tbsa=compute_tbsa(c, age, age_source="estimate") if c is not None and age is not None else None,
         chart=c,
         mechanism=Mechanism(encounter_id=EID, type=mechanism, enclosed_space=enclosed, voltage_v=voltage),
         primary=primary if with_primary else None,
@@ -507,3 +507,10 @@ def test_superficial_only_adult_burn_meets_nothing():
     assert r.current.met == [] and r.older.met == []
     assert r.current.recommendation == "No ABA referral criterion met on the recorded data"
     assert r.notice
+
+
+@pytest.mark.parametrize("age, met", [(14.5, True), (15.0, False)])
+def test_pediatric_by_age_runs_to_the_15th_birthday(age, met):
+    # ABA "<= 14 years": a 50 kg 14.5-year-old is a child, a 50 kg 15-year-old is not
+    r = assess_referral(inputs((R.trunk_anterior, 0.1, D.superficial_partial), age=age, weight=50))
+    assert ("aba2022.pediatric" in r.current.met) is met

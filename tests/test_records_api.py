@@ -86,20 +86,21 @@ def test_history_keeps_every_version_and_delete_is_soft(client, clin, patient):
     assert versions[-1]["meta"]["delete_reason"] == "duplicate registration"
     assert client.get("/api/v1/patients", headers=clin).json() == []
     assert len(client.get("/api/v1/patients", params={"include_deleted": True}, headers=clin).json()) == 1
-    again = client.put(url, json=patient, headers={**clin, "If-Match": '"3"'})
-    assert again.status_code == 409
+    assert client.put(url, json=patient, headers={**clin, "If-Match": '"2"'}).status_code == 412
+    restored = client.put(url, json=patient, headers={**clin, "If-Match": '"3"'})  # restoring the withdrawn version
+    assert restored.status_code == 200 and restored.json()["meta"]["deleted"] is False
 
 
 @pytest.mark.parametrize(
     "mutate, field",
     [
-        (lambda b: b.update(weight_kg=0), "weight_kg"),
-        (lambda b: b.update(weight_kg=401), "weight_kg"),
-        (lambda b: b.update(weight_kg="seventy"), "weight_kg"),
-        (lambda b: b.update(height_cm=5), "height_cm"),
-        (lambda b: b.update(shoe_size=42), "data"),
-        (lambda b: b.update(sex="unicorn"), "sex"),
-        (lambda b: b.update(id="not-an-id"), "id"),
+        (lambda b: b.update(weight_kg=0), "$.weight_kg"),
+        (lambda b: b.update(weight_kg=401), "$.weight_kg"),
+        (lambda b: b.update(weight_kg="seventy"), "$.weight_kg"),
+        (lambda b: b.update(height_cm=5), "$.height_cm"),
+        (lambda b: b.update(shoe_size=42), "$.shoe_size"),
+        (lambda b: b.update(sex="unicorn"), "$.sex"),
+        (lambda b: b.update(id="not-an-id"), "$.id"),
     ],
 )
 def test_bad_fields_are_rejected_with_field_detail_and_store_nothing(client, clin, services, mutate, field):
@@ -204,5 +205,104 @@ def test_full_record_returns_every_part(client, clin, encounter):
     mech = {"encounter_id": eid, "type": "scald", "agent": "boiling water", "duration_s": 3}
     client.put(f"/api/v1/encounters/{eid}/mechanism", json=mech, headers={**clin, "If-None-Match": "*"})
     full = client.get(f"/api/v1/encounters/{eid}/record", headers=clin).json()
-    assert set(full) == {"encounter", "intake", "mechanism", "assessment"}
-    assert full["intake"]["data"]["medications"] == [{"name": "salbutamol", "dose": None}]
+    assert full["encounter"]["data"]["id"] == eid
+    assert set(full["parts"]) == {"intake", "mechanism", "assessment"}
+    assert full["parts"]["intake"]["data"]["medications"] == [{"name": "salbutamol", "dose": None}]
+
+
+def _put_chart(client, headers, eid, entries, **precondition):
+    return client.put(
+        f"/api/v1/encounters/{eid}/burn-chart", json=_chart(eid, entries), headers={**headers, **precondition}
+    )
+
+
+TRUNK = [{"region": "trunk_anterior", "fraction": 1.0, "depth": "deep_partial"}]
+
+
+def test_withdrawing_a_part_recomputes_the_results_without_it(client, clin, encounter):
+    eid = encounter["id"]
+    _put_chart(client, clin, eid, TRUNK, **{"If-None-Match": "*"})
+    assert client.get(f"/api/v1/encounters/{eid}/assessment", headers=clin).json()["data"]["tbsa"] is not None
+    r = client.delete(f"/api/v1/encounters/{eid}/burn-chart", params={"reason": "charted on the wrong patient"},
+                      headers={**clin, "If-Match": '"1"'})  # fmt: skip
+    assert r.status_code == 200
+    a = client.get(f"/api/v1/encounters/{eid}/assessment", headers=clin).json()["data"]
+    assert a["tbsa"] is None and a["fluids"] is None
+    assert not any(i["kind"] == "burn_chart" for i in a["inputs"])
+
+
+def test_a_withdrawn_part_is_restored_by_updating_its_withdrawn_version(client, clin, encounter):
+    eid = encounter["id"]
+    _put_chart(client, clin, eid, TRUNK, **{"If-None-Match": "*"})
+    client.delete(
+        f"/api/v1/encounters/{eid}/burn-chart", params={"reason": "mistake"}, headers={**clin, "If-Match": "1"}
+    )
+    again = _put_chart(client, clin, eid, TRUNK, **{"If-None-Match": "*"})
+    assert again.status_code == 412 and 'If-Match: "2"' in again.json()["detail"]
+    restored = _put_chart(client, clin, eid, TRUNK, **{"If-Match": '"2"'})
+    assert restored.status_code == 200
+    assert restored.json()["meta"]["version"] == 3 and restored.json()["meta"]["deleted"] is False
+    a = client.get(f"/api/v1/encounters/{eid}/assessment", headers=clin).json()["data"]
+    assert a["tbsa"]["tbsa_percent"] == pytest.approx(13.0)
+
+
+def test_if_none_match_on_an_existing_part_is_412(client, clin, encounter):
+    eid = encounter["id"]
+    assert _put_chart(client, clin, eid, TRUNK, **{"If-None-Match": "*"}).status_code == 201
+    other = [{"region": "trunk_posterior", "fraction": 1.0, "depth": "deep_partial"}]
+    r = _put_chart(client, clin, eid, other, **{"If-None-Match": "*"})
+    assert r.status_code == 412 and r.json()["current"]["data"]["entries"][0]["region"] == "trunk_anterior"
+    stale = _put_chart(client, clin, eid, other, **{"If-Match": '"7"'})
+    assert stale.status_code == 412 and stale.headers["etag"] == '"1"'
+
+
+def test_an_encounter_cannot_move_to_another_patient(client, clin, encounter):
+    other = patient_body()
+    client.post("/api/v1/patients", json=other, headers=clin)
+    moved = {**encounter, "patient_id": other["id"]}
+    r = client.put(f"/api/v1/encounters/{encounter['id']}", json=moved, headers={**clin, "If-Match": '"1"'})
+    assert r.status_code == 422 and r.json()["errors"][0]["field"] == "$.patient_id"
+
+
+def test_a_withdrawn_patients_encounters_take_no_new_parts(client, clin, patient, encounter):
+    client.delete(
+        f"/api/v1/patients/{patient['id']}", params={"reason": "duplicate"}, headers={**clin, "If-Match": "1"}
+    )
+    intake = {"encounter_id": encounter["id"], "history_of_present_illness": "x"}
+    r = client.put(f"/api/v1/encounters/{encounter['id']}/intake", json=intake, headers={**clin, "If-None-Match": "*"})
+    assert r.status_code == 422 and "withdrawn" in r.json()["detail"]
+
+
+def test_recomputing_a_withdrawn_encounter_is_refused(client, clin, encounter):
+    eid = encounter["id"]
+    client.delete(f"/api/v1/encounters/{eid}", params={"reason": "opened twice"}, headers={**clin, "If-Match": "1"})
+    assert client.post(f"/api/v1/encounters/{eid}/assessment", headers=clin).status_code == 409
+
+
+def test_huge_cursors_and_offsets_are_refused_not_crashed(client, clin):
+    assert client.get("/api/v1/sync/changes", params={"since": 10**30}, headers=clin).status_code == 400
+    assert client.get("/api/v1/patients", params={"offset": 10**30}, headers=clin).status_code == 400
+    assert client.get("/api/v1/patients", params={"limit": 10**6}, headers=clin).status_code == 200
+
+
+def test_times_with_any_utc_offset_are_accepted_and_kept(client, clin, patient):
+    e = encounter_body(patient["id"])
+    t = (now() - dt.timedelta(hours=1)).astimezone(dt.timezone(dt.timedelta(hours=5, minutes=30)))
+    e["time_of_arrival"] = t.isoformat()
+    r = client.post("/api/v1/encounters", json=e, headers=clin)
+    assert r.status_code == 201
+    stored = dt.datetime.fromisoformat(r.json()["data"]["time_of_arrival"])
+    assert stored == t
+
+
+def test_a_nurse_records_fluid_given_but_not_the_formula(client, auth, encounter):
+    eid, nurse = encounter["id"], auth["nurse"]
+    url = f"/api/v1/encounters/{eid}/resuscitation"
+    given = {"encounter_id": eid, "fluid_given": [{"volume_ml": 250, "given_at": now().isoformat()}]}
+    assert client.put(url, json=given, headers={**nurse, "If-None-Match": "*"}).status_code == 201
+    abls = {**given, "formula": "abls"}
+    r = client.put(url, json=abls, headers={**nurse, "If-Match": '"1"'})
+    assert r.status_code == 403 and "formula" in r.json()["detail"]
+    assert client.put(url, json=abls, headers={**auth["clinician"], "If-Match": '"1"'}).status_code == 200
+    more = {**abls, "fluid_given": [*given["fluid_given"], {"volume_ml": 500, "given_at": now().isoformat()}]}
+    assert client.put(url, json=more, headers={**nurse, "If-Match": '"2"'}).status_code == 200

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import gc
+import multiprocessing
 import threading
 
 import pytest
@@ -84,3 +86,72 @@ def test_an_error_inside_a_write_leaves_nothing_behind(services):
     conn = services.db.connection()
     assert conn.execute("SELECT COUNT(*) FROM record_versions").fetchone()[0] == 0
     assert conn.execute("SELECT COUNT(*) FROM audit_log WHERE action LIKE 'record.%'").fetchone()[0] == 0
+
+
+def test_a_threads_connection_is_closed_when_the_thread_ends(tmp_path):
+    db = Database(tmp_path / "t.sqlite3")
+    db.migrate()
+
+    def touch() -> None:
+        db.connection().execute("SELECT 1").fetchone()
+
+    for _ in range(30):
+        t = threading.Thread(target=touch)
+        t.start()
+        t.join()
+    gc.collect()
+    assert db.open_connections <= 2  # this thread's, and at most one not yet collected
+    db.close()
+    assert db.open_connections == 0
+
+
+def _create_patients(db_path: str, count: int) -> None:
+    from gateway.services.records import RecordService
+    from schemas.config import Config, GatewayConfig
+
+    db = Database(db_path)
+    svc = RecordService(db, Config(gateway=GatewayConfig(database=db_path)))
+    for _ in range(count):
+        body = patient_body(uuid7())
+        svc.create(CLINICIAN, RecordKind.patient, body["id"], body)
+    db.close()
+
+
+def test_writers_in_separate_processes_keep_every_write_and_the_chain(tmp_path):
+    path = str(tmp_path / "shared.sqlite3")
+    Database(path).migrate()
+    ctx = multiprocessing.get_context("spawn")
+    procs = [ctx.Process(target=_create_patients, args=(path, 20)) for _ in range(3)]
+    for p in procs:
+        p.start()
+    for p in procs:
+        p.join(120)
+        assert p.exitcode == 0
+    db = Database(path)
+    assert db.connection().execute("SELECT COUNT(*) FROM record_heads").fetchone()[0] == 60
+    assert audit.verify(db.connection()).ok
+    db.close()
+
+
+def _migrate(path: str) -> None:
+    Database(path).migrate()
+
+
+def test_processes_starting_together_on_a_new_database_both_migrate(tmp_path):
+    path = str(tmp_path / "fresh.sqlite3")
+    ctx = multiprocessing.get_context("spawn")
+    procs = [ctx.Process(target=_migrate, args=(path,)) for _ in range(3)]
+    for p in procs:
+        p.start()
+    for p in procs:
+        p.join(60)
+        assert p.exitcode == 0
+
+
+def test_audit_verify_detects_an_edited_record_version(services):
+    body = patient_body()
+    services.records.create(CLINICIAN, RecordKind.patient, body["id"], body)
+    conn = services.db.connection()
+    conn.execute("UPDATE record_versions SET data = replace(data, '70.0', '50.0') WHERE kind = 'patient'")
+    result = audit.verify(conn)
+    assert not result.ok and "altered after entry" in result.reason

@@ -171,3 +171,26 @@ def test_push_body_must_be_well_formed(client, auth, services):
     r = client.post("/api/v1/sync/push", json=bad, headers=phone)
     assert r.status_code == 400 and r.headers["content-type"].startswith("application/problem+json")
     assert client.get("/api/v1/sync/changes", params={"since": -1}, headers=phone).status_code == 400
+
+
+def test_a_reused_mutation_id_with_other_content_is_rejected_not_dropped(client, auth, services):
+    phone = auth["clinician"]
+    first = patient_body()
+    m = _m("patient", first["id"], "create", first)
+    assert client.post("/api/v1/sync/push", json={"mutations": [m]}, headers=phone).json()["applied"] == 1
+    second = patient_body()
+    reused = {**m, "id": second["id"], "data": second}
+    r = client.post("/api/v1/sync/push", json={"mutations": [reused]}, headers=phone).json()
+    assert r["results"][0]["status"] == "rejected" and "different change" in r["results"][0]["error"]
+    assert client.get(f"/api/v1/patients/{second['id']}", headers=phone).status_code == 404
+    # the same mutation with only the phone's clock changed is still the same mutation
+    same = {**m, "client_time": now().isoformat()}
+    assert client.post("/api/v1/sync/push", json={"mutations": [same]}, headers=phone).json()["results"][0]["replayed"]
+
+
+def test_a_replay_is_checked_against_the_callers_role(client, auth):
+    p = patient_body()
+    m = _m("patient", p["id"], "create", p)
+    assert client.post("/api/v1/sync/push", json={"mutations": [m]}, headers=auth["clinician"]).json()["applied"] == 1
+    r = client.post("/api/v1/sync/push", json={"mutations": [m]}, headers=auth["consultant"]).json()
+    assert r["results"][0]["status"] == "rejected"

@@ -38,12 +38,12 @@ class AuthController(Controller):
             data.username, data.password, client=client_address(request), device_token=device_token
         )
 
-    @post("/pair", sync_to_thread=False, status_code=201, exclude_from_auth=True,
+    @post("/pair", sync_to_thread=True, status_code=201, exclude_from_auth=True,
           summary="Exchange a one-time pairing code for this phone's device token")  # fmt: skip
     def pair(self, request: Request, data: JSONBody[PairRequest], services: ServicesDep) -> DeviceToken:
         return services.accounts.pair(data, client=client_address(request))
 
-    @post("/logout", sync_to_thread=False, status_code=204, summary="End this session")
+    @post("/logout", sync_to_thread=True, status_code=204, summary="End this session")
     def logout(self, request: AuthedRequest, services: ServicesDep) -> None:
         services.accounts.logout(request.user)
 
@@ -61,11 +61,20 @@ class AdminController(Controller):
     def create_user(self, data: JSONBody[UserCreate], request: AuthedRequest, services: ServicesDep) -> User:
         return services.accounts.create_user(request.user, data)
 
+    @post("/users/{user_id:str}/disable", sync_to_thread=True, status_code=200,
+          summary="Disable an account: its sessions end at once")  # fmt: skip
+    def disable_user(self, user_id: FromPath[str], request: AuthedRequest, services: ServicesDep) -> User:
+        return services.accounts.set_active(request.user, user_id, False)
+
+    @post("/users/{user_id:str}/enable", sync_to_thread=True, status_code=200, summary="Re-enable an account")
+    def enable_user(self, user_id: FromPath[str], request: AuthedRequest, services: ServicesDep) -> User:
+        return services.accounts.set_active(request.user, user_id, True)
+
     @get("/users", sync_to_thread=False, summary="List user accounts")
     def list_users(self, request: AuthedRequest, services: ServicesDep) -> list[User]:
         return services.accounts.list_users(request.user)
 
-    @post("/pairing-codes", sync_to_thread=False, summary="Create a short-lived one-time code to pair a phone")
+    @post("/pairing-codes", sync_to_thread=True, summary="Create a short-lived one-time code to pair a phone")
     def pairing_code(
         self, data: JSONBody[PairingCodeRequest], request: AuthedRequest, services: ServicesDep
     ) -> PairingCode:
@@ -75,7 +84,7 @@ class AdminController(Controller):
     def devices(self, request: AuthedRequest, services: ServicesDep) -> list[Device]:
         return services.accounts.list_devices(request.user)
 
-    @post("/devices/{device_id:str}/revoke", sync_to_thread=False, status_code=200,
+    @post("/devices/{device_id:str}/revoke", sync_to_thread=True, status_code=200,
           summary="Revoke a phone: its token and sessions stop working at once")  # fmt: skip
     def revoke(self, device_id: FromPath[str], request: AuthedRequest, services: ServicesDep) -> Device:
         return services.accounts.revoke_device(request.user, device_id)
@@ -83,7 +92,7 @@ class AdminController(Controller):
     @get("/audit", sync_to_thread=False, summary="Audit entries after a sequence number")
     def audit_entries(
         self, request: AuthedRequest, services: ServicesDep,
-        after: Annotated[int, QueryParameter(ge=0, description="Last sequence number already read")] = 0,
+        after: Annotated[int, QueryParameter(ge=0, le=2**63 - 1, description="Last sequence number already read")] = 0,
         limit: Annotated[int, QueryParameter(ge=1, le=1000)] = 200,
     ) -> list[AuditEntry]:  # fmt: skip
         return audit_trail.list_entries(services.db, request.user, after, limit)

@@ -1,4 +1,4 @@
-"""Liveness and readiness: the only endpoint without authentication."""
+"""Liveness and readiness: the only endpoint without authentication besides the ways in."""
 
 from __future__ import annotations
 
@@ -6,22 +6,11 @@ from litestar import get
 
 from gateway import __version__
 from gateway.dependencies import ServicesDep
-from schemas.base import Frozen
+from schemas.accounts import Health
 
 
-class Health(Frozen):
-    status: str
-    version: str
-    database: str
-
-
-@get(
-    "/health",
-    sync_to_thread=False,
-    exclude_from_auth=True,
-    tags=["health"],
-    summary="Is the gateway up and its database readable?",
-)
+@get("/health", sync_to_thread=False, exclude_from_auth=True, tags=["health"],
+     summary="Is the gateway up and its database readable?")  # fmt: skip
 def health(services: ServicesDep) -> Health:
     services.db.connection().execute("SELECT 1 FROM _sqlite_migrations LIMIT 1").fetchall()
-    return Health(status="ok", version=__version__, database=str(services.db.path.name))
+    return Health(status="ok", version=__version__)

@@ -14,7 +14,7 @@ from gateway.controllers.common import outcome_response, parse_version, record_r
 from gateway.controllers.records import IfMatch, Reason
 from gateway.dependencies import AuthedRequest, ServicesDep
 from schemas.burn_chart import BurnChart
-from schemas.errors import InvalidInput
+from schemas.errors import Conflict, InvalidInput, VersionMismatch
 from schemas.record_parts import Intake, Mechanism, PrimarySurvey, Resuscitation, SecondarySurvey
 from schemas.records import Record, RecordHistory, RecordKind
 
@@ -56,7 +56,11 @@ def writable_part_controller(slug: str, kind: RecordKind, struct: type) -> type[
         if if_match is None and if_none_match is not None:
             if if_none_match.strip() != "*":
                 raise InvalidInput('If-None-Match must be "*" (create only if absent)')
-            return outcome_response(services.records.create(request.user, kind, encounter_id, data))
+            try:
+                return outcome_response(services.records.create(request.user, kind, encounter_id, data))
+            except Conflict as exc:
+                # RFC 9110: If-None-Match: * fails with 412 when the part already exists.
+                raise VersionMismatch(exc.detail, current=exc.current) from exc
         version = parse_version(if_match, action=f"updating the {label} (or If-None-Match: * to create it)")
         return outcome_response(services.records.update(request.user, kind, encounter_id, data, version))
 

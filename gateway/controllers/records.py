@@ -10,12 +10,13 @@ from litestar.params import FromPath, FromQuery, HeaderParameter, JSONBody, Quer
 from gateway.controllers.common import outcome_response, parse_version, record_response
 from gateway.dependencies import AuthedRequest, ServicesDep
 from schemas.patient import Encounter, Patient
-from schemas.records import Record, RecordHistory, RecordKind
+from schemas.records import EncounterRecord, Record, RecordHistory, RecordKind
 
 IfMatch = Annotated[str | None, HeaderParameter(name="If-Match", description='The version you edited, e.g. "3"')]
 Reason = Annotated[str, QueryParameter(min_length=1, max_length=200, description="Why the record is withdrawn")]
-Limit = Annotated[int, QueryParameter(ge=1, le=500)]
-Offset = Annotated[int, QueryParameter(ge=0)]
+MAX_INT64 = 2**63 - 1
+Limit = Annotated[int, QueryParameter(ge=1, le=MAX_INT64, description="Page size (capped by the gateway)")]
+Offset = Annotated[int, QueryParameter(ge=0, le=MAX_INT64)]
 
 
 class PatientController(Controller):
@@ -31,7 +32,7 @@ class PatientController(Controller):
         self, request: AuthedRequest, services: ServicesDep, include_deleted: FromQuery[bool] = False,
         limit: Limit = 100, offset: Offset = 0,
     ) -> list[Record]:  # fmt: skip
-        return services.records.list(request.user, RecordKind.patient, include_deleted=include_deleted,
+        return services.records.list_records(request.user, RecordKind.patient, include_deleted=include_deleted,
                                      limit=limit, offset=offset)  # fmt: skip
 
     @get("/{patient_id:str}", sync_to_thread=False, summary="Read a patient")
@@ -59,8 +60,8 @@ class PatientController(Controller):
     def encounters(self, patient_id: FromPath[str], request: AuthedRequest, services: ServicesDep,
                    include_deleted: FromQuery[bool] = False) -> list[Record]:  # fmt: skip
         services.records.get(request.user, RecordKind.patient, patient_id)
-        return services.records.list(request.user, RecordKind.encounter, parent_id=patient_id,
-                                     include_deleted=include_deleted, limit=10_000)  # fmt: skip
+        return services.records.list_records(request.user, RecordKind.encounter, parent_id=patient_id,
+                                     include_deleted=include_deleted, limit=None)  # fmt: skip
 
 
 class EncounterController(Controller):
@@ -99,7 +100,5 @@ class EncounterController(Controller):
     @get("/{encounter_id:str}/record", sync_to_thread=False, summary="The encounter with every part and its assessment")
     def full_record(
         self, encounter_id: FromPath[str], request: AuthedRequest, services: ServicesDep
-    ) -> dict[str, Record]:
-        encounter = services.records.get(request.user, RecordKind.encounter, encounter_id)
-        parts = services.records.encounter_parts(request.user, encounter_id)
-        return {"encounter": encounter, **{kind.value: record for kind, record in parts.items()}}
+    ) -> EncounterRecord:
+        return services.records.encounter_record(request.user, encounter_id)

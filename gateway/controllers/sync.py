@@ -18,8 +18,8 @@ class SyncController(Controller):
     @get("/changes", sync_to_thread=False, summary="Record versions after a cursor, oldest first")
     def changes(
         self, request: AuthedRequest, services: ServicesDep,
-        since: Annotated[int, QueryParameter(ge=0, description="next_cursor of the previous page")] = 0,
-        limit: Annotated[int, QueryParameter(ge=1, description="Page size (capped by the gateway)")] = 200,
+        since: Annotated[int, QueryParameter(ge=0, le=2**63 - 1, description="next_cursor of the previous page")] = 0,
+        limit: Annotated[int, QueryParameter(ge=1, le=2**63 - 1, description="Page size (capped by the gateway)")] = 200,
     ) -> ChangesPage:  # fmt: skip
         return services.phone_sync.changes(request.user, since, limit)
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 import datetime as dt
 import hashlib
 import secrets
+import threading
 
 import argon2
 
@@ -28,7 +29,7 @@ from schemas.accounts import (
     User,
     UserCreate,
 )
-from schemas.base import utcnow
+from schemas.base import iso, utcnow
 from schemas.config import SecurityConfig
 from schemas.errors import AuthenticationFailed, Conflict, NotFound
 from schemas.ids import uuid7
@@ -38,10 +39,6 @@ _CODE_ALPHABET = "ABCDEFGHJKMNPQRSTVWXYZ23456789"  # no 0/O, 1/I/L: read aloud a
 
 def token_hash(token: str) -> str:
     return hashlib.sha256(token.encode("utf-8")).hexdigest()
-
-
-def _iso(t: dt.datetime) -> str:
-    return t.isoformat(timespec="microseconds")
 
 
 def _user(row) -> User:
@@ -60,8 +57,9 @@ class AccountService:
             memory_cost=config.argon2_memory_kib,
             parallelism=config.argon2_parallelism,
         )
+        self._hashing = threading.BoundedSemaphore(config.argon2_max_concurrent)
         # Verifying against this keeps a login for an unknown user as slow as for a known one.
-        self._dummy_hash = self.hasher.hash(secrets.token_hex(16))
+        self._dummy_hash = self._hash(secrets.token_hex(16))
         self.throttle = LoginThrottle(db, config)
 
     # users ---------------------------------------------------------------
@@ -69,7 +67,7 @@ class AccountService:
         """Create an account. actor None is the command line on the gateway itself."""
         if actor is not None:
             require_admin(actor, "manage_users")
-        password_hash = self.hasher.hash(body.password)
+        password_hash = self._hash(body.password)
         user_id = uuid7()
         with self.db.write() as conn:
             if conn.execute("SELECT 1 FROM users WHERE username = ?", (body.username,)).fetchone():
@@ -77,7 +75,7 @@ class AccountService:
             conn.execute(
                 "INSERT INTO users (id, username, password_hash, role, display_name, active, created_at)"
                 " VALUES (?,?,?,?,?,1,?)",
-                (user_id, body.username, password_hash, body.role.value, body.display_name, _iso(utcnow())),
+                (user_id, body.username, password_hash, body.role.value, body.display_name, iso(utcnow())),
             )
             audit.append(
                 conn, action="user.create", user_id=actor.user_id if actor else None,
@@ -86,17 +84,37 @@ class AccountService:
             )  # fmt: skip
             return _user(conn.execute("SELECT * FROM users WHERE id = ?", (user_id,)).fetchone())
 
+    def set_active(self, actor: Principal, user_id: str, active: bool) -> User:
+        """Disable (ending every session at once) or re-enable an account."""
+        require_admin(actor, "manage_users")
+        if user_id == actor.user_id and not active:
+            raise Conflict("you cannot disable your own account")
+        with self.db.write() as conn:
+            row = conn.execute("SELECT * FROM users WHERE id = ?", (user_id,)).fetchone()
+            if row is None:
+                raise NotFound(f"no user with id {user_id}")
+            conn.execute("UPDATE users SET active = ? WHERE id = ?", (int(active), user_id))
+            if not active:
+                conn.execute("UPDATE sessions SET revoked_at = ? WHERE user_id = ? AND revoked_at IS NULL",
+                             (iso(utcnow()), user_id))  # fmt: skip
+            audit.append(conn, action="user.enable" if active else "user.disable", user_id=actor.user_id,
+                         device_id=actor.device_id, kind="user", record_id=user_id, detail=row["username"])  # fmt: skip
+            return _user(conn.execute("SELECT * FROM users WHERE id = ?", (user_id,)).fetchone())
+
     def list_users(self, actor: Principal) -> list[User]:
         require_admin(actor, "manage_users")
         return [_user(r) for r in self.db.connection().execute("SELECT * FROM users ORDER BY username")]
 
     # login ---------------------------------------------------------------
     def login(self, username: str, password: str, *, client: str, device_token: str | None) -> Session:
-        keys = [f"user:{username.lower()}", f"client:{client}"]
-        self.throttle.check(keys)
+        account_key, client_key = f"user:{username.lower()}", f"client:{client}"
+        self.throttle.begin_attempt([account_key, client_key])
         row = self.db.connection().execute("SELECT * FROM users WHERE username = ?", (username,)).fetchone()
         if not self._password_ok(row, password):
-            self.throttle.record_failure(keys, user_id=row["id"] if row else None, what=f"login as {username!r}")
+            with self.db.write() as conn:
+                # The typed name is not kept unless it is an account: people type passwords into it.
+                audit.append(conn, action="auth.failed", user_id=row["id"] if row else None, device_id=None,
+                             detail="wrong password" if row else "unknown username")  # fmt: skip
             raise AuthenticationFailed("wrong username or password")
         if not row["active"]:
             raise AuthenticationFailed("this account is disabled: ask an administrator")
@@ -104,25 +122,31 @@ class AccountService:
         token = secrets.token_urlsafe(32)
         now = utcnow()
         expires = now + dt.timedelta(seconds=self.config.session_ttl_s)
+        rehash = self._hash(password) if self.hasher.check_needs_rehash(row["password_hash"]) else None
         with self.db.write() as conn:
-            if self.hasher.check_needs_rehash(row["password_hash"]):
-                conn.execute("UPDATE users SET password_hash = ? WHERE id = ?", (self.hasher.hash(password), row["id"]))
+            if rehash:
+                conn.execute("UPDATE users SET password_hash = ? WHERE id = ?", (rehash, row["id"]))
             conn.execute(
                 "INSERT INTO sessions (token_hash, user_id, device_id, created_at, expires_at) VALUES (?,?,?,?,?)",
-                (token_hash(token), row["id"], device_id, _iso(now), _iso(expires)),
+                (token_hash(token), row["id"], device_id, iso(now), iso(expires)),
             )
             if device_id:
-                conn.execute("UPDATE devices SET last_seen_at = ? WHERE id = ?", (_iso(now), device_id))
-            self.throttle.clear(conn, keys[:1])  # the account, not the address: one good login must not reset a spray
+                conn.execute("UPDATE devices SET last_seen_at = ? WHERE id = ?", (iso(now), device_id))
+            self.throttle.succeeded(conn, account_key, [client_key])
             audit.append(conn, action="auth.login", user_id=row["id"], device_id=device_id)
         return Session(access_token=token, expires_at=expires, user=_user(row), device_id=device_id)
 
+    def _hash(self, password: str) -> str:
+        with self._hashing:
+            return self.hasher.hash(password)
+
     def _password_ok(self, row, password: str) -> bool:
         try:
-            return self.hasher.verify(row["password_hash"] if row else self._dummy_hash, password) and row is not None
-        except argon2.exceptions.VerificationError:
-            return False
-        except argon2.exceptions.InvalidHashError:
+            with self._hashing:
+                return (
+                    self.hasher.verify(row["password_hash"] if row else self._dummy_hash, password) and row is not None
+                )
+        except (argon2.exceptions.VerificationError, argon2.exceptions.InvalidHashError):
             return False
 
     def _device_for_token(self, device_token: str) -> str:
@@ -161,7 +185,7 @@ class AccountService:
     def logout(self, principal: Principal) -> None:
         with self.db.write() as conn:
             conn.execute(
-                "UPDATE sessions SET revoked_at = ? WHERE token_hash = ?", (_iso(utcnow()), principal.session_hash)
+                "UPDATE sessions SET revoked_at = ? WHERE token_hash = ?", (iso(utcnow()), principal.session_hash)
             )
             audit.append(conn, action="auth.logout", user_id=principal.user_id, device_id=principal.device_id)
 
@@ -175,30 +199,23 @@ class AccountService:
         with self.db.write() as conn:
             conn.execute(
                 "INSERT INTO pairing_codes (code_hash, device_name, created_by, created_at, expires_at) VALUES (?,?,?,?,?)",
-                (token_hash(raw), body.device_name, actor.user_id, _iso(now), _iso(expires)),
+                (token_hash(raw), body.device_name, actor.user_id, iso(now), iso(expires)),
             )
             audit.append(conn, action="device.pairing_code", user_id=actor.user_id, device_id=actor.device_id,
                          detail=body.device_name)  # fmt: skip
         return PairingCode(code=code, device_name=body.device_name, expires_at=expires)
 
     def pair(self, body: PairRequest, *, client: str) -> DeviceToken:
-        keys = [f"pair:{client}"]
-        self.throttle.check(keys)
+        self.throttle.begin_attempt([f"pair:{client}"])
         normalized = body.code.upper().replace("-", "").replace(" ", "")
         now = utcnow()
         with self.db.write() as conn:
             row = conn.execute("SELECT * FROM pairing_codes WHERE code_hash = ?", (token_hash(normalized),)).fetchone()
-            problem = None
-            if row is None:
-                problem = "pairing code not recognised: check it, or ask for a new one"
-            elif row["used_at"]:
-                problem = "this pairing code was already used: ask for a new one"
-            elif dt.datetime.fromisoformat(row["expires_at"]) <= now:
-                problem = "this pairing code has expired: ask for a new one"
-            if problem is None:
+            usable = row is not None and not row["used_at"] and dt.datetime.fromisoformat(row["expires_at"]) > now
+            if usable:
                 token = secrets.token_urlsafe(32)
                 device_id = uuid7()
-                conn.execute("UPDATE pairing_codes SET used_at = ? WHERE code_hash = ?", (_iso(now), row["code_hash"]))
+                conn.execute("UPDATE pairing_codes SET used_at = ? WHERE code_hash = ?", (iso(now), row["code_hash"]))
                 conn.execute(
                     "INSERT INTO devices (id, name, fingerprint, token_hash, paired_at, paired_by) VALUES (?,?,?,?,?,?)",
                     (
@@ -206,15 +223,15 @@ class AccountService:
                         row["device_name"],
                         body.device_fingerprint,
                         token_hash(token),
-                        _iso(now),
+                        iso(now),
                         row["created_by"],
                     ),
                 )
                 audit.append(conn, action="device.pair", user_id=row["created_by"], device_id=device_id,
                              kind="device", record_id=device_id, detail=row["device_name"])  # fmt: skip
-        if problem is not None:
-            self.throttle.record_failure(keys, user_id=None, what="pairing")
-            raise AuthenticationFailed(problem)
+        if not usable:
+            # One answer for wrong, used and expired codes: nothing to learn about which codes exist.
+            raise AuthenticationFailed("pairing code not valid (wrong, already used or expired): ask for a new one")
         return DeviceToken(device_id=device_id, device_token=token)
 
     def list_devices(self, actor: Principal) -> list[Device]:
@@ -224,7 +241,7 @@ class AccountService:
 
     def revoke_device(self, actor: Principal, device_id: str) -> Device:
         require_admin(actor, "manage_devices")
-        now = _iso(utcnow())
+        now = iso(utcnow())
         with self.db.write() as conn:
             row = conn.execute("SELECT * FROM devices WHERE id = ?", (device_id,)).fetchone()
             if row is None:

@@ -8,9 +8,9 @@ import msgspec
 
 from gateway.services.permissions import Principal
 from gateway.storage import audit
-from gateway.storage import records as rows
+from gateway.storage import records as store
 from processing.clinical.assessment import assess
-from schemas.base import utcnow
+from schemas.base import iso, utcnow
 from schemas.clinical_results import InputRef
 from schemas.config import Config
 from schemas.records import ENCOUNTER_PARTS, RECORD_TYPES, Record, RecordKind
@@ -27,12 +27,12 @@ def refresh_assessments(
 ) -> None:
     """Recompute and store each encounter's Assessment as of now. Inside the caller's transaction."""
     for encounter_id in encounter_ids:
-        encounter = rows.find_head(conn, RecordKind.encounter, encounter_id)
+        encounter = store.find_head(conn, RecordKind.encounter, encounter_id)
         if encounter is None or encounter.meta.deleted:
             continue
-        patient = rows.get_head(conn, RecordKind.patient, encounter.data["patient_id"])
+        patient = store.get_head(conn, RecordKind.patient, encounter.data["patient_id"])
         parts = {
-            k: r for k, r in rows.heads_of_children(conn, encounter_id, _INPUT_PARTS).items() if not r.meta.deleted
+            k: r for k, r in store.heads_of_children(conn, encounter_id, _INPUT_PARTS).items() if not r.meta.deleted
         }
         used = [patient, encounter, *parts.values()]
         now = utcnow()
@@ -44,15 +44,19 @@ def refresh_assessments(
             as_of=now,
             config=config.clinical,
             computed_at=now,
+            clock_skew_s=config.gateway.clock_skew_s,
         )
-        current = rows.find_head(conn, RecordKind.assessment, encounter_id)
+        current = store.find_head(conn, RecordKind.assessment, encounter_id)
         version = current.meta.version + 1 if current else 1
-        rows.insert_version(
+        data_json = msgspec.json.encode(result)
+        store.insert_version(
             conn, kind=RecordKind.assessment, record_id=encounter_id, version=version, parent_id=encounter_id,
-            data_json=msgspec.json.encode(result),
-            created_at=current.meta.created_at.isoformat(timespec="microseconds") if current else None,
+            data_json=data_json, created_at=iso(current.meta.created_at) if current else None,
             updated_by=principal.username, device_id=principal.device_id,
         )  # fmt: skip
-        audit.append(conn, action="assessment.compute", user_id=principal.user_id, device_id=principal.device_id,
-                     kind=RecordKind.assessment.value, record_id=encounter_id,
-                     before_version=current.meta.version if current else None, after_version=version)  # fmt: skip
+        audit.append(
+            conn, action="assessment.compute", user_id=principal.user_id, device_id=principal.device_id,
+            kind=RecordKind.assessment.value, record_id=encounter_id,
+            before_version=current.meta.version if current else None, after_version=version,
+            content_hash=store.version_content_hash(data_json.decode(), False, None),
+        )  # fmt: skip

@@ -4,9 +4,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import msgspec
+
 from schemas.accounts import Role
 from schemas.errors import Forbidden
-from schemas.records import RecordKind
+from schemas.records import Record, RecordKind
 
 ALL_KINDS = frozenset(RecordKind)
 CLIENT_WRITABLE = ALL_KINDS - {RecordKind.assessment}
@@ -32,6 +34,8 @@ DELETE: dict[Role, frozenset[RecordKind]] = {
     Role.consultant: frozenset(),
     Role.admin: frozenset(),
 }
+# Nurses record fluid given; choosing the formula is a prescription.
+PRESCRIPTION_FIELDS = {RecordKind.resuscitation: ("formula", "custom_ml_per_kg_per_percent")}
 ADMIN_ONLY = frozenset({"manage_users", "manage_devices", "read_audit"})
 
 
@@ -68,3 +72,15 @@ def require_delete(principal: Principal, kind: RecordKind) -> None:
 def require_admin(principal: Principal, action: str) -> None:
     if action not in ADMIN_ONLY or principal.role is not Role.admin:
         raise Forbidden(f"only an administrator may {action.replace('_', ' ')}")
+
+
+def check_field_rules(principal: Principal, kind: RecordKind, struct, current: Record | None) -> None:
+    """Fields only a clinician may change, within a part others may write."""
+    fields = PRESCRIPTION_FIELDS.get(kind)
+    if not fields or principal.role is Role.clinician:
+        return
+    # Without a stored version the baseline is the part's defaults (encounter_id is its one required field).
+    baseline = current.data if current else msgspec.to_builtins(type(struct)(encounter_id=struct.encounter_id))
+    for name in fields:
+        if msgspec.to_builtins(getattr(struct, name)) != baseline.get(name):
+            raise Forbidden(f"a {principal.role.value} may record fluid given but not change {name.replace('_', ' ')}")

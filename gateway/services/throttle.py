@@ -1,7 +1,10 @@
 """Slowing down repeated failed logins and pairing attempts, per account and per client address.
 
-After `login_free_failures` failures in the window, each further failure locks the key
-for base x 2^(n-1) seconds (capped). Kept in SQLite so a restart does not reset it.
+Every attempt is counted before the password is checked, in its own write transaction,
+so parallel guesses cannot all slip past the check. After `login_free_failures` attempts
+that did not succeed, each further one locks the key for base x 2^(n-1) seconds (capped).
+A count is forgotten after `login_failure_window_s` without attempts. Kept in SQLite, so
+a restart does not reset it.
 """
 
 from __future__ import annotations
@@ -10,9 +13,8 @@ import datetime as dt
 import math
 import sqlite3
 
-from gateway.storage import audit
 from gateway.storage.database import Database
-from schemas.base import utcnow
+from schemas.base import iso, utcnow
 from schemas.config import SecurityConfig
 from schemas.errors import TooManyAttempts
 
@@ -22,42 +24,42 @@ class LoginThrottle:
         self.db = db
         self.config = config
 
-    def check(self, keys: list[str]) -> None:
+    def begin_attempt(self, keys: list[str]) -> None:
+        """Refuse if any key is locked; otherwise count this attempt against every key."""
         now = utcnow()
-        conn = self.db.connection()
-        for key in keys:
-            row = conn.execute("SELECT locked_until FROM login_throttle WHERE key = ?", (key,)).fetchone()
-            if row and row["locked_until"]:
-                until = dt.datetime.fromisoformat(row["locked_until"])
-                if until > now:
-                    wait = math.ceil((until - now).total_seconds())
-                    raise TooManyAttempts(
-                        f"too many failed attempts: wait {wait} s before trying again", retry_after_s=wait
-                    )
-
-    def record_failure(self, keys: list[str], *, user_id: str | None, what: str) -> None:
-        now = utcnow()
-        window = dt.timedelta(seconds=self.config.login_failure_window_s)
         with self.db.write() as conn:
-            for key in keys:
-                row = conn.execute("SELECT failures, window_start FROM login_throttle WHERE key = ?", (key,)).fetchone()
-                failures = 1
-                start = now
-                if row and dt.datetime.fromisoformat(row["window_start"]) + window > now:
-                    failures = row["failures"] + 1
-                    start = dt.datetime.fromisoformat(row["window_start"])
-                locked_until = None
-                over = failures - self.config.login_free_failures
-                if over > 0:
-                    delay = min(self.config.login_max_delay_s, self.config.login_base_delay_s * 2 ** (over - 1))
-                    locked_until = (now + dt.timedelta(seconds=delay)).isoformat()
-                conn.execute(
-                    "INSERT INTO login_throttle (key, failures, window_start, locked_until) VALUES (?,?,?,?)"
-                    " ON CONFLICT (key) DO UPDATE SET failures = excluded.failures,"
-                    " window_start = excluded.window_start, locked_until = excluded.locked_until",
-                    (key, failures, start.isoformat(), locked_until),
-                )
-            audit.append(conn, action="auth.failed", user_id=user_id, device_id=None, detail=what)
+            rows = {k: conn.execute("SELECT * FROM login_throttle WHERE key = ?", (k,)).fetchone() for k in keys}
+            for row in rows.values():
+                if row and row["locked_until"] and dt.datetime.fromisoformat(row["locked_until"]) > now:
+                    wait = math.ceil((dt.datetime.fromisoformat(row["locked_until"]) - now).total_seconds())
+                    raise TooManyAttempts(f"too many failed attempts: wait {wait} s before trying again",
+                                          retry_after_s=wait)  # fmt: skip
+            for key, row in rows.items():
+                self._count(conn, key, row, now)
 
-    def clear(self, conn: sqlite3.Connection, keys: list[str]) -> None:
-        conn.executemany("DELETE FROM login_throttle WHERE key = ?", [(k,) for k in keys])
+    def _count(self, conn: sqlite3.Connection, key: str, row, now: dt.datetime) -> None:
+        window = dt.timedelta(seconds=self.config.login_failure_window_s)
+        recent = row is not None and dt.datetime.fromisoformat(row["last_attempt_at"]) + window > now
+        failures = row["failures"] + 1 if recent else 1
+        locked_until = None
+        over = failures - self.config.login_free_failures
+        if over > 0:
+            delay = min(self.config.login_max_delay_s, self.config.login_base_delay_s * 2 ** (over - 1))
+            locked_until = iso(now + dt.timedelta(seconds=delay))
+        conn.execute(
+            "INSERT INTO login_throttle (key, failures, last_attempt_at, locked_until) VALUES (?,?,?,?)"
+            " ON CONFLICT (key) DO UPDATE SET failures = excluded.failures,"
+            " last_attempt_at = excluded.last_attempt_at, locked_until = excluded.locked_until",
+            (key, failures, iso(now), locked_until),
+        )
+
+    def succeeded(self, conn: sqlite3.Connection, account_key: str, other_keys: list[str]) -> None:
+        """A good login clears the account's count; the address only gets this attempt back,
+        so one valid account cannot reset a password spray against others."""
+        conn.execute("DELETE FROM login_throttle WHERE key = ?", (account_key,))
+        # SET expressions see the old row: the lock goes only if this attempt was what crossed the limit.
+        conn.executemany(
+            "UPDATE login_throttle SET failures = MAX(failures - 1, 0),"
+            " locked_until = CASE WHEN failures - 1 <= ? THEN NULL ELSE locked_until END WHERE key = ?",
+            [(self.config.login_free_failures, k) for k in other_keys],
+        )

@@ -8,7 +8,9 @@ import sqlite3
 
 import msgspec
 
-from gateway.storage import records as rows
+from gateway.storage import records as store
+from processing.clinical.fluids import validate_resuscitation
+from processing.clinical.lund_browder import validate_chart
 from schemas.base import utcnow
 from schemas.burn_chart import BurnChart
 from schemas.config import Config
@@ -16,7 +18,7 @@ from schemas.errors import InvalidInput, NotFound
 from schemas.patient import Encounter, Patient
 from schemas.problem import FieldProblem
 from schemas.record_parts import PrimarySurvey, Resuscitation, SecondarySurvey
-from schemas.records import RECORD_TYPES, RecordKind
+from schemas.records import RECORD_TYPES, Record, RecordKind
 
 _AT_PATH = re.compile(r"^(?P<msg>.*?)(?: - at `(?P<path>[^`]*)`)?$", re.S)
 
@@ -62,10 +64,14 @@ def check(conn: sqlite3.Connection, kind: RecordKind, record_id: str, struct, co
             "$.encounter_id",
             f"encounter_id {struct.encounter_id} does not match the encounter {record_id} in the address",
         )
-    _require_live(conn, RecordKind.encounter, record_id)
+    encounter = _require_live(conn, RecordKind.encounter, record_id)
+    _require_live(conn, RecordKind.patient, encounter.data["patient_id"])
     if isinstance(struct, (PrimarySurvey, SecondarySurvey, BurnChart)):
         _not_future(struct.assessed_at, "$.assessed_at", config)
+    if isinstance(struct, BurnChart):
+        validate_chart(struct)
     if isinstance(struct, Resuscitation):
+        validate_resuscitation(struct)
         for i, given in enumerate(struct.fluid_given):
             _not_future(given.given_at, f"$.fluid_given[{i}].given_at", config)
     return record_id
@@ -74,7 +80,8 @@ def check(conn: sqlite3.Connection, kind: RecordKind, record_id: str, struct, co
 def _check_patient(record_id: str, patient: Patient) -> None:
     if patient.id != record_id:
         raise _bad("$.id", f"id {patient.id} does not match {record_id} in the address")
-    if patient.date_of_birth is not None and patient.date_of_birth > utcnow().date():
+    # The gateway's UTC date can be a day behind the bedside's local date.
+    if patient.date_of_birth is not None and patient.date_of_birth > utcnow().date() + dt.timedelta(days=1):
         raise _bad("$.date_of_birth", "date of birth is in the future")
 
 
@@ -88,9 +95,16 @@ def _check_encounter(conn: sqlite3.Connection, record_id: str, enc: Encounter, c
         raise _bad("$.time_of_injury", "the time of injury is after the time of arrival")
 
 
-def _require_live(conn: sqlite3.Connection, kind: RecordKind, record_id: str) -> None:
-    head = rows.find_head(conn, kind, record_id)
+def _require_live(conn: sqlite3.Connection, kind: RecordKind, record_id: str) -> Record:
+    head = store.find_head(conn, kind, record_id)
     if head is None:
-        raise NotFound(f"no {kind.value} with id {record_id}: create it first")
+        raise NotFound(f"no {kind.label} with id {record_id}: create it first")
     if head.meta.deleted:
-        raise InvalidInput(f"the {kind.value} {record_id} was withdrawn: records cannot be added to it")
+        raise InvalidInput(f"the {kind.label} {record_id} was withdrawn: records cannot be added to it")
+    return head
+
+
+def check_unchanged_links(kind: RecordKind, struct, current: Record) -> None:
+    """An update may not move a record to another patient or encounter."""
+    if kind is RecordKind.encounter and struct.patient_id != current.data["patient_id"]:
+        raise _bad("$.patient_id", "an encounter cannot move to another patient: withdraw it and open a new one")

@@ -1,8 +1,10 @@
 """The append-only, hash-chained audit log.
 
 Each entry's hash covers its own fields and the previous entry's hash, so changing,
-inserting or removing a past entry breaks every hash after it. Removing entries from
-the end is only detectable against a head hash kept elsewhere (see docs/security.md).
+inserting or removing a past entry breaks the chain. Entries that record a record
+version also carry that version's content hash, so editing stored record data is
+detected too. Removing entries from the end is only detectable against a head hash
+kept elsewhere (see docs/security.md).
 """
 
 from __future__ import annotations
@@ -12,13 +14,14 @@ import json
 import sqlite3
 from collections.abc import Iterator
 
+from gateway.storage.records import version_content_hash
 from schemas.audit import AuditEntry, AuditVerification
-from schemas.base import utcnow
+from schemas.base import iso, utcnow
 
 GENESIS_HASH = "0" * 64
 _HASHED_FIELDS = (
     "seq", "at", "user_id", "device_id", "action", "kind", "record_id",
-    "before_version", "after_version", "detail", "prev_hash",
+    "before_version", "after_version", "detail", "content_hash", "prev_hash",
 )  # fmt: skip
 
 
@@ -38,12 +41,13 @@ def append(
     before_version: int | None = None,
     after_version: int | None = None,
     detail: str = "",
+    content_hash: str | None = None,
 ) -> AuditEntry:
     """Append one entry. Call inside the write transaction of the change it records."""
     last = conn.execute("SELECT seq, hash FROM audit_log ORDER BY seq DESC LIMIT 1").fetchone()
     fields = {
         "seq": (last["seq"] + 1) if last else 1,
-        "at": utcnow().isoformat(timespec="microseconds"),
+        "at": iso(utcnow()),
         "user_id": user_id,
         "device_id": device_id,
         "action": action,
@@ -52,6 +56,7 @@ def append(
         "before_version": before_version,
         "after_version": after_version,
         "detail": detail,
+        "content_hash": content_hash,
         "prev_hash": last["hash"] if last else GENESIS_HASH,
     }
     fields["hash"] = entry_hash(fields)
@@ -73,23 +78,45 @@ def entries(conn: sqlite3.Connection, after_seq: int = 0, limit: int | None = No
 
 
 def verify(conn: sqlite3.Connection) -> AuditVerification:
-    """Walk the chain from the start; name the first entry that does not fit."""
+    """Walk the chain from the start; name the first entry that does not fit.
+
+    When entry N was rewritten with a recomputed hash, N itself looks intact and the
+    break shows at N + 1: the chain can say where it stops holding, not who forged what.
+    """
     expected_prev = GENESIS_HASH
     count = 0
     for entry in entries(conn):
         count += 1
         fields = {name: getattr(entry, name) for name in _HASHED_FIELDS}
         if entry.seq != count:
-            return _broken(count, entry.seq, f"entry {count} is missing (next entry found is {entry.seq})")
+            return _broken(count, f"entry {count} is missing (next entry found is {entry.seq})")
         if entry.prev_hash != expected_prev:
             return _broken(
-                count, entry.seq, f"entry {entry.seq} does not follow entry {entry.seq - 1}: previous-hash mismatch"
+                entry.seq, f"entry {entry.seq} does not follow entry {entry.seq - 1}: previous-hash mismatch"
             )
         if entry_hash(fields) != entry.hash:
-            return _broken(count, entry.seq, f"entry {entry.seq} was altered: its content does not match its hash")
+            return _broken(entry.seq, f"entry {entry.seq} was altered: its content does not match its hash")
+        problem = _record_content_problem(conn, entry)
+        if problem:
+            return _broken(entry.seq, problem)
         expected_prev = entry.hash
     return AuditVerification(ok=True, entries=count, first_broken_seq=None, reason=f"all {count} entries intact")
 
 
-def _broken(count: int, seq: int, reason: str) -> AuditVerification:
-    return AuditVerification(ok=False, entries=count, first_broken_seq=min(seq, count), reason=reason)
+def _record_content_problem(conn: sqlite3.Connection, entry: AuditEntry) -> str | None:
+    if entry.content_hash is None:
+        return None
+    row = conn.execute(
+        "SELECT data, deleted, delete_reason FROM record_versions WHERE kind = ? AND id = ? AND version = ?",
+        (entry.kind, entry.record_id, entry.after_version),
+    ).fetchone()
+    what = f"{entry.kind} {entry.record_id} version {entry.after_version}"
+    if row is None:
+        return f"{what}, recorded by entry {entry.seq}, is missing from the record store"
+    if version_content_hash(row["data"], bool(row["deleted"]), row["delete_reason"]) != entry.content_hash:
+        return f"{what} was altered after entry {entry.seq} recorded it"
+    return None
+
+
+def _broken(seq: int, reason: str) -> AuditVerification:
+    return AuditVerification(ok=False, entries=seq, first_broken_seq=seq, reason=reason)

@@ -1,42 +1,63 @@
 """Connections and transactions for the gateway's single SQLite file.
 
 Each thread gets its own connection (sqlite3 connections must not be shared across
-threads). Writes use BEGIN IMMEDIATE so that two writers queue on the busy timeout
-instead of failing half-way through a read-then-write.
+threads), closed when the thread ends: the ASGI server's worker threads come and go.
+Writes use BEGIN IMMEDIATE so that two writers queue on the busy timeout instead of
+failing half-way through a read-then-write.
 """
 
 from __future__ import annotations
 
+import fcntl
 import sqlite3
 import threading
+import weakref
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
 import sqlite_utils
 
+from schemas.config import GatewayConfig
 from schemas.errors import StorageError
 
 
+class _ThreadConnection:
+    """Owns one thread's connection; closing it when the thread's locals are released."""
+
+    def __init__(self, conn: sqlite3.Connection):
+        self.conn = conn
+        self._finalizer = weakref.finalize(self, conn.close)
+
+    def close(self) -> None:
+        self._finalizer()
+
+
 class Database:
-    """A SQLite file shared by the API's threads (and by worker processes later)."""
+    """A SQLite file shared by the API's threads (and by other processes such as the CLI)."""
 
     def __init__(self, path: str | Path, *, synchronous: str = "FULL", busy_timeout_ms: int = 10_000):
         self.path = Path(path)
         self.synchronous = synchronous
         self.busy_timeout_ms = busy_timeout_ms
         self._local = threading.local()
-        self._all: list[sqlite3.Connection] = []
-        self._lock = threading.Lock()
+        self._open: weakref.WeakSet[_ThreadConnection] = weakref.WeakSet()
+
+    @classmethod
+    def from_config(cls, config: GatewayConfig) -> Database:
+        return cls(config.database, synchronous=config.sqlite_synchronous, busy_timeout_ms=config.busy_timeout_ms)
+
+    @property
+    def open_connections(self) -> int:
+        return len(self._open)
 
     def connection(self) -> sqlite3.Connection:
-        conn = getattr(self._local, "conn", None)
-        if conn is None:
-            conn = self._connect()
-            self._local.conn = conn
-            with self._lock:
-                self._all.append(conn)
-        return conn
+        holder = getattr(self._local, "holder", None)
+        if holder is None:
+            holder = _ThreadConnection(self._connect())
+            self._local.holder = holder
+            self._open.add(holder)
+        return holder.conn
 
     def _connect(self) -> sqlite3.Connection:
         try:
@@ -63,11 +84,14 @@ class Database:
             raise StorageError(f"database busy, try again: {exc}") from exc
         try:
             yield conn
-        except BaseException:
-            conn.execute("ROLLBACK")
-            raise
-        else:
             conn.execute("COMMIT")
+        except BaseException as exc:
+            # SQLite may already have rolled back by itself (disk full, I/O error).
+            if conn.in_transaction:
+                conn.execute("ROLLBACK")
+            if isinstance(exc, sqlite3.IntegrityError) or not isinstance(exc, sqlite3.DatabaseError):
+                raise
+            raise StorageError(f"the database could not store this change, nothing was written: {exc}") from exc
 
     @contextmanager
     def savepoint(self, conn: sqlite3.Connection, name: str = "item") -> Iterator[None]:
@@ -90,20 +114,22 @@ class Database:
         try:
             yield conn
         finally:
-            conn.execute("COMMIT")
+            if conn.in_transaction:
+                conn.execute("COMMIT")
 
     def migrate(self) -> list[str]:
-        """Apply pending migrations; returns the names applied."""
+        """Apply pending migrations; returns the names applied. Safe when processes start together."""
         from gateway.storage.migrations import migrations
 
-        db = sqlite_utils.Database(self.connection())
-        pending = [m.name for m in migrations.pending(db)]
-        migrations.apply(db)
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        with open(self.path.with_name(self.path.name + ".migrate-lock"), "w") as lock:
+            fcntl.flock(lock, fcntl.LOCK_EX)
+            db = sqlite_utils.Database(self.connection())
+            pending = [m.name for m in migrations.pending(db)]
+            migrations.apply(db)
         return pending
 
     def close(self) -> None:
-        with self._lock:
-            for conn in self._all:
-                conn.close()
-            self._all.clear()
+        for holder in list(self._open):
+            holder.close()
         self._local = threading.local()

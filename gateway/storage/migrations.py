@@ -47,6 +47,7 @@ def m001_records(db: Database) -> None:
         """
         CREATE TABLE applied_mutations (
             mutation_id TEXT PRIMARY KEY,
+            fingerprint TEXT NOT NULL,
             result TEXT NOT NULL,
             applied_at TEXT NOT NULL,
             user_id TEXT
@@ -108,7 +109,7 @@ def m002_accounts(db: Database) -> None:
         CREATE TABLE login_throttle (
             key TEXT PRIMARY KEY,
             failures INTEGER NOT NULL,
-            window_start TEXT NOT NULL,
+            last_attempt_at TEXT NOT NULL,
             locked_until TEXT
         ) WITHOUT ROWID"""
     )
@@ -129,6 +130,7 @@ def m003_audit(db: Database) -> None:
             before_version INTEGER,
             after_version INTEGER,
             detail TEXT NOT NULL DEFAULT '',
+            content_hash TEXT,
             prev_hash TEXT NOT NULL,
             hash TEXT NOT NULL
         )"""

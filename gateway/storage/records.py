@@ -7,12 +7,14 @@ moves the record's head. Soft deletes are versions too, so history stays readabl
 from __future__ import annotations
 
 import datetime as dt
+import hashlib
+import json
 import sqlite3
 from collections.abc import Iterable
 
 import msgspec
 
-from schemas.base import utcnow
+from schemas.base import iso, utcnow
 from schemas.errors import NotFound
 from schemas.records import Record, RecordKind, RecordMeta
 
@@ -21,6 +23,12 @@ _COLUMNS = (
     "v.created_at, v.updated_at, v.updated_by, v.device_id"
 )
 _decode = msgspec.json.Decoder(dict).decode
+
+
+def version_content_hash(data_text: str, deleted: bool, delete_reason: str | None) -> str:
+    """What the audit trail remembers of a stored version, to detect later edits."""
+    canonical = json.dumps([data_text, deleted, delete_reason], separators=(",", ":"), ensure_ascii=False)
+    return hashlib.sha256(canonical.encode("utf-8")).hexdigest()
 
 
 def row_to_record(row: sqlite3.Row) -> Record:
@@ -55,7 +63,7 @@ def find_head(conn: sqlite3.Connection, kind: RecordKind, record_id: str) -> Rec
 def get_head(conn: sqlite3.Connection, kind: RecordKind, record_id: str) -> Record:
     record = find_head(conn, kind, record_id)
     if record is None:
-        raise NotFound(f"no {kind.value.replace('_', ' ')} with id {record_id}")
+        raise NotFound(f"no {kind.label} with id {record_id}")
     return record
 
 
@@ -74,7 +82,7 @@ def insert_version(
     delete_reason: str | None = None,
 ) -> Record:
     """Write the next version and move the head. Call inside a write transaction."""
-    now = utcnow().isoformat(timespec="microseconds")
+    now = iso(utcnow())
     cur = conn.execute(
         "INSERT INTO record_versions (kind, id, version, parent_id, data, deleted, delete_reason,"
         " created_at, updated_at, updated_by, device_id) VALUES (?,?,?,?,?,?,?,?,?,?,?)",
@@ -99,7 +107,7 @@ def history(conn: sqlite3.Connection, kind: RecordKind, record_id: str) -> list[
         (kind.value, record_id),
     ).fetchall()
     if not rows:
-        raise NotFound(f"no {kind.value.replace('_', ' ')} with id {record_id}")
+        raise NotFound(f"no {kind.label} with id {record_id}")
     return [row_to_record(r) for r in rows]
 
 
@@ -109,9 +117,10 @@ def list_heads(
     *,
     parent_id: str | None = None,
     include_deleted: bool = False,
-    limit: int = 100,
+    limit: int | None = 100,
     offset: int = 0,
 ) -> list[Record]:
+    """Current versions, oldest first; limit None for all."""
     sql = f"SELECT {_COLUMNS} FROM record_heads h JOIN record_versions v ON v.seq = h.seq WHERE h.kind = ?"
     params: list = [kind.value]
     if parent_id is not None:
@@ -120,7 +129,7 @@ def list_heads(
     if not include_deleted:
         sql += " AND h.deleted = 0"
     sql += " ORDER BY v.created_at, v.id LIMIT ? OFFSET ?"
-    params += [limit, offset]
+    params += [-1 if limit is None else limit, offset]
     return [row_to_record(r) for r in conn.execute(sql, params)]
 
 

@@ -1,4 +1,4 @@
-"""Burned %TBSA by the Lund-Browder chart, with a Rule-of-Nines figure for comparison.
+"""Burned %TBSA by the Lund-Browder chart, with a Rule-of-Nines figure (rule_of_nines.py) for comparison.
 
 The published chart gives whole-region percentages for age columns 0, 1, 5, 10, 15 years
 and adult. The schema's regions split most of these front/back (or palmar/dorsal,
@@ -19,19 +19,37 @@ Superficial (epidermal) burns are not counted in %TBSA; they are reported separa
 from __future__ import annotations
 
 import bisect
-import enum
-import math
 from collections import defaultdict
+from typing import get_args
 
+from processing.clinical.checks import Problems, check_age, check_fraction, finite, member
+from processing.clinical.rule_of_nines import (
+    NINES_DESCRIPTIONS,
+    NinesVariant,
+    nines_from_chart,
+    nines_variant_for_age,
+    rule_of_nines,
+)
 from schemas.burn_chart import AgeAdjustment, BurnChart, BurnDepth
 from schemas.burn_chart import LundBrowderRegion as R
-from schemas.clinical_results import RegionContribution, TbsaResult
+from schemas.clinical_results import AgeSource, RegionContribution, TbsaResult
 from schemas.errors import InvalidInput
+
+# Re-exported: callers import the age check and the Rule of Nines from here too.
+__all__ = [
+    "NinesVariant",
+    "check_age",
+    "column_description",
+    "compute_tbsa",
+    "palm_estimate",
+    "region_percent",
+    "rule_of_nines",
+    "validate_chart",
+]
 
 COLUMN_AGES: tuple[float, ...] = (0.0, 1.0, 5.0, 10.0, 15.0, 18.0)
 COLUMN_LABELS: tuple[str, ...] = ("0 years", "1 year", "5 years", "10 years", "15 years", "adult")
 ADULT_AGE = 18.0
-MAX_AGE = 130.0
 
 # Whole-region % of body surface per column (0, 1, 5, 10, 15, adult). Paired parts
 # (buttock, arm, hand, thigh, leg, foot) are "each side".
@@ -95,62 +113,8 @@ PALM_PERCENT = 0.8
 _FRACTION_TOLERANCE = 1e-9
 
 
-class NinesVariant(enum.StrEnum):
-    adult = "adult"
-    child = "child"
-
-
-CHILD_NINES_MAX_AGE = 10.0
-"""The child Rule of Nines is used below this age; from 10 years the adult rule."""
-
-NINES_VALUES: dict[NinesVariant, dict[str, float]] = {
-    NinesVariant.adult: {
-        "head_neck": 9,
-        "arm_right": 9,
-        "arm_left": 9,
-        "trunk_anterior": 18,
-        "trunk_posterior": 18,
-        "leg_right": 18,
-        "leg_left": 18,
-        "perineum": 1,
-    },
-    NinesVariant.child: {
-        "head_neck": 18,
-        "arm_right": 9,
-        "arm_left": 9,
-        "trunk_anterior": 18,
-        "trunk_posterior": 18,
-        "leg_right": 14,
-        "leg_left": 14,
-    },
-}
-
-NINES_DESCRIPTIONS: dict[NinesVariant, str] = {
-    NinesVariant.adult: (
-        "adult Rule of Nines: head & neck 9, each arm 9, anterior trunk 18, posterior trunk 18 "
-        "(buttocks included), each leg 18, perineum/genitalia 1"
-    ),
-    NinesVariant.child: (
-        "child Rule of Nines (age < 10): head & neck 18, each arm 9, anterior trunk 18 "
-        "(genitalia included), posterior trunk 18 (buttocks included), each leg 14"
-    ),
-}
-
-
-def check_age(age_years: float) -> float:
-    """The age as a float, or InvalidInput if it is not a possible age in years."""
-    if isinstance(age_years, bool) or not isinstance(age_years, (int, float)) or not math.isfinite(age_years):
-        raise InvalidInput(f"age {age_years!r} is not a number: enter the patient's age in years (0-130)")
-    if not 0 <= age_years <= MAX_AGE:
-        raise InvalidInput(f"age {age_years:g} years is impossible: enter the patient's age in years (0-130)")
-    return float(age_years)
-
-
 def _method(method: AgeAdjustment | str) -> AgeAdjustment:
-    try:
-        return AgeAdjustment(method)
-    except ValueError:
-        raise InvalidInput(f"unknown age adjustment {method!r}: use 'band' or 'interpolate'") from None
+    return member(AgeAdjustment, method, "age adjustment")
 
 
 def _band_column(age: float) -> int:
@@ -170,10 +134,7 @@ def _whole_percent(whole: str, age: float, method: AgeAdjustment) -> float:
 def region_percent(region: R, age_years: float, method: AgeAdjustment) -> float:
     """The region's share of the whole body surface, in %, for this age (unrounded)."""
     age = check_age(age_years)
-    try:
-        whole, share = REGION_PARTS[R(region)]
-    except ValueError:
-        raise InvalidInput(f"unknown Lund-Browder region {region!r}") from None
+    whole, share = REGION_PARTS[member(R, region, "Lund-Browder region")]
     return _whole_percent(whole, age, _method(method)) * share
 
 
@@ -198,104 +159,64 @@ def column_description(age_years: float, method: AgeAdjustment) -> str:
     return f"interpolated between columns '{COLUMN_LABELS[i]}' and {upper} (age {age:g})"
 
 
-def nines_variant_for_age(age_years: float) -> NinesVariant:
-    return NinesVariant.child if check_age(age_years) < CHILD_NINES_MAX_AGE else NinesVariant.adult
-
-
-def nines_group(region: R, variant: NinesVariant) -> str:
-    """The Rule-of-Nines group a Lund-Browder region belongs to."""
-    name = R(region).value
-    if name.startswith(("head_", "neck_")):
-        return "head_neck"
-    if name.startswith("buttock_"):
-        return "trunk_posterior"
-    if name == "genitalia":
-        return "perineum" if variant is NinesVariant.adult else "trunk_anterior"
-    if name.startswith("trunk_"):
-        return name
-    side = "right" if "_right_" in name or name.endswith("_right") else "left"
-    limb = "arm" if name.startswith(("upper_arm", "lower_arm", "hand")) else "leg"
-    return f"{limb}_{side}"
-
-
-def rule_of_nines(group_fractions: dict[str, float], variant: NinesVariant | str) -> float:
-    """%TBSA by the Rule of Nines from the burned fraction (0-1) of each group."""
-    try:
-        values = NINES_VALUES[NinesVariant(variant)]
-    except ValueError:
-        raise InvalidInput(f"unknown Rule-of-Nines variant {variant!r}: use 'adult' or 'child'") from None
-    total = 0.0
-    for group, fraction in group_fractions.items():
-        if group not in values:
-            raise InvalidInput(
-                f"'{group}' is not a group of the {NinesVariant(variant).value} Rule of Nines "
-                f"(groups: {', '.join(values)})"
-            )
-        _check_fraction(fraction, group)
-        total += values[group] * fraction
-    return round(total, 2)
-
-
 def palm_estimate(palms: float) -> float:
     """%TBSA from a count of the patient's own palms (with fingers), 0.8 % each."""
-    if isinstance(palms, bool) or not isinstance(palms, (int, float)) or not math.isfinite(palms):
-        raise InvalidInput(f"palm count {palms!r} is not a number")
-    if palms < 0:
-        raise InvalidInput(f"palm count {palms:g} is impossible: count the burned area in palms (0 or more)")
-    percent = palms * PALM_PERCENT
-    if percent > 100:
-        raise InvalidInput(f"{palms:g} palms is more than the whole body (100 %TBSA is 125 palms)")
-    return round(percent, 2)
+    count = finite(palms, "palm count", 0, 100 / PALM_PERCENT, unit="palms (125 palms are the whole body)")
+    return round(count * PALM_PERCENT, 2)
 
 
-def _check_fraction(fraction: float, where: str) -> None:
-    if isinstance(fraction, bool) or not isinstance(fraction, (int, float)) or not math.isfinite(fraction):
-        raise InvalidInput(f"burned fraction of {where} is not a number")
-    if not 0 <= fraction <= 1:
-        raise InvalidInput(f"burned fraction {fraction:g} of {where} is impossible: enter a fraction from 0 to 1")
+def validate_chart(chart: BurnChart) -> None:
+    """Refuse a chart no patient can have; the gateway calls this when a chart is written.
 
-
-def _validate_entries(chart: BurnChart) -> None:
-    seen: set[tuple[R, BurnDepth]] = set()
+    Each entry's region, depth and fraction (0 to 1) must be valid, a region may appear once
+    per depth, and the fractions of one region across depths must add up to at most 1.
+    Raises InvalidInput naming every problem, with a FieldProblem per offending field
+    ("$.entries[2].fraction").
+    """
+    problems = Problems()
+    problems.check(_method, chart.age_adjustment)
+    first_at: dict[tuple[R, BurnDepth], int] = {}
+    region_entries: dict[R, list[int]] = defaultdict(list)
     region_total: dict[R, float] = defaultdict(float)
-    for entry in chart.entries:
-        region = R(entry.region)
-        _check_fraction(entry.fraction, region.value)
-        key = (region, BurnDepth(entry.depth))
-        if key in seen:
-            raise InvalidInput(
-                f"{region.value} is charted twice at depth {key[1].value}: merge the two entries into one"
+    for i, entry in enumerate(chart.entries):
+        at = f"$.entries[{i}]"
+        region = problems.check(member, R, entry.region, "Lund-Browder region", field=f"{at}.region")
+        depth = problems.check(member, BurnDepth, entry.depth, "burn depth", field=f"{at}.depth")
+        where = region.value if region is not None else "the region"
+        fraction = problems.check(check_fraction, entry.fraction, where, field=f"{at}.fraction")
+        if region is None or depth is None or fraction is None:
+            continue
+        if (region, depth) in first_at:
+            problems.add(
+                f"{at}.depth",
+                f"{region.value} is charted twice at depth {depth.value} (also $.entries[{first_at[region, depth]}]): "
+                "merge the two entries into one",
             )
-        seen.add(key)
-        region_total[region] += entry.fraction
+        first_at.setdefault((region, depth), i)
+        region_entries[region].append(i)
+        region_total[region] += fraction
     for region, total in region_total.items():
         if total > 1 + _FRACTION_TOLERANCE:
-            raise InvalidInput(
+            message = (
                 f"{region.value} is charted as {total:.2f} of its area burned across depths: "
                 "the fractions of one region must add up to at most 1"
             )
+            for i in region_entries[region]:
+                problems.add(f"$.entries[{i}].fraction", message)
+    problems.raise_if_any("burn chart")
 
 
-def _nines_from_chart(chart: BurnChart, age: float, method: AgeAdjustment, variant: NinesVariant) -> float:
-    """Rule-of-Nines %TBSA: each group's LB-weighted burned share times its nines value."""
-    group_total: dict[str, float] = defaultdict(float)
-    for region in R:
-        group_total[nines_group(region, variant)] += region_percent(region, age, method)
-    group_burned: dict[str, float] = defaultdict(float)
-    for entry in chart.entries:
-        if BurnDepth(entry.depth) is BurnDepth.superficial:
-            continue
-        group = nines_group(entry.region, variant)
-        group_burned[group] += region_percent(entry.region, age, method) * entry.fraction
-    values = NINES_VALUES[variant]
-    return sum(values[g] * burned / group_total[g] for g, burned in group_burned.items())
+def compute_tbsa(chart: BurnChart, age_years: float, *, age_source: AgeSource) -> TbsaResult:
+    """Burned %TBSA (partial + full thickness) of a chart for a patient of this age.
 
-
-def compute_tbsa(chart: BurnChart, age_years: float) -> TbsaResult:
-    """Burned %TBSA (partial + full thickness) of a chart for a patient of this age."""
+    age_source says where the age came from ("date_of_birth" or "estimate"); it is reported
+    with the result, since the chart column depends on the age.
+    """
     age = check_age(age_years)
+    if age_source not in get_args(AgeSource):
+        raise InvalidInput(f"unknown age source {age_source!r}: use 'date_of_birth' or 'estimate'")
+    validate_chart(chart)
     method = _method(chart.age_adjustment)
-    _validate_entries(chart)
     by_depth: dict[BurnDepth, float] = {depth: 0.0 for depth in BurnDepth}
     contributions = []
     for entry in chart.entries:
@@ -322,8 +243,9 @@ def compute_tbsa(chart: BurnChart, age_years: float) -> TbsaResult:
         partial_thickness_percent=round(partial, 2),
         excluded_superficial_percent=round(by_depth[BurnDepth.superficial], 2),
         age_years=round(age, 2),
+        age_source=age_source,
         age_adjustment=column_description(age, method),
-        rule_of_nines_percent=round(_nines_from_chart(chart, age, method, variant), 2),
+        rule_of_nines_percent=round(nines_from_chart(chart, lambda r: region_percent(r, age, method), variant), 2),
         rule_of_nines_variant=NINES_DESCRIPTIONS[variant],
         contributions=contributions,
     )

@@ -20,7 +20,7 @@ from collections.abc import Callable
 
 import msgspec
 
-from processing.clinical.fluids import is_child
+from processing.clinical.children import aba_pediatric
 from schemas.burn_chart import BurnChart, BurnDepth, LundBrowderRegion, SpecialArea
 from schemas.clinical_results import (
     CriterionResult,
@@ -123,7 +123,8 @@ def _critical_areas(chart: BurnChart, depths: frozenset[BurnDepth]) -> list[str]
 
 
 def child_status(inp: ReferralInputs) -> tuple[bool | None, str]:
-    child = is_child(inp.age_years, inp.weight_kg, inp.config)
+    """Child by the ABA referral wording (<= 14 years in completed years, or < 30 kg), and what is known."""
+    child = aba_pediatric(inp.age_years, inp.weight_kg, inp.config)
     known = [f"age {round(inp.age_years, 1):g} years" if inp.age_years is not None else "age unknown"]
     if inp.weight_kg is not None:
         known.append(f"weight {round(inp.weight_kg, 1):g} kg")

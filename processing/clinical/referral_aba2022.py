@@ -16,7 +16,8 @@ How the rows are read from the record:
   singed facial or nasal hair, and smoke exposure (a flame burn in an enclosed space);
 - "all potentially deep burns of any size" (consult) is any deep partial-thickness burn charted
   (full-thickness burns are already in the immediate tier);
-- "all pediatric burns" (immediate) is any burn in a child (<= 14 years or < 30 kg by default);
+- "all pediatric burns" (immediate) is any burn in a child (<= 14 years, i.e. before the 15th
+  birthday, or < 30 kg by default: children.aba_pediatric);
   a recorded safeguarding concern (possible non-accidental trauma) is named in the reason.
 The published table has no row for special social, emotional or rehabilitative needs: that item
 stays on the older list only (referral_aba2006).
