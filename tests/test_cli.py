@@ -45,10 +45,17 @@ def test_schemas_export_writes_a_json_schema_per_message(tmp_path):
     assert len(names) == len(public_messages())
 
 
-def test_every_public_message_round_trips_through_json():
-    for struct in public_messages():
+def test_every_input_message_refuses_unknown_fields():
+    """Messages clients send are Message subclasses: their schema must say additionalProperties false."""
+    from schemas.base import Message
+
+    inputs = [s for s in public_messages() if issubclass(s, Message) and not s.__struct_config__.frozen]
+    assert len(inputs) >= 20
+    for struct in inputs:
         schema = msgspec.json.schema(struct)
-        assert schema, struct
+        assert schema["$defs"][struct.__name__]["additionalProperties"] is False, struct.__name__
+        with pytest.raises(msgspec.ValidationError, match="unknown field"):
+            msgspec.json.decode(b'{"surely_not_a_field": 1}', type=struct)
 
 
 def test_users_add_rejects_a_short_password(tmp_path):

@@ -47,7 +47,7 @@ def _readers(kind: RecordKind, label: str):
 
 
 def writable_part_controller(slug: str, kind: RecordKind, struct: type) -> type[Controller]:
-    label = kind.value.replace("_", " ")
+    label = kind.label
     read, history = _readers(kind, label)
 
     @put("/", sync_to_thread=True, summary=f"Create (If-None-Match: *) or update (If-Match) the {label}")

@@ -56,17 +56,17 @@ def readable_kinds(principal: Principal) -> frozenset[RecordKind]:
 
 def require_read(principal: Principal, kind: RecordKind) -> None:
     if kind not in READ[principal.role]:
-        raise Forbidden(f"a {principal.role.value} may not read {kind.value.replace('_', ' ')} records")
+        raise Forbidden(f"a {principal.role.value} may not read {kind.label} records")
 
 
 def require_write(principal: Principal, kind: RecordKind) -> None:
     if kind not in WRITE[principal.role]:
-        raise Forbidden(f"a {principal.role.value} may not write {kind.value.replace('_', ' ')} records")
+        raise Forbidden(f"a {principal.role.value} may not write {kind.label} records")
 
 
 def require_delete(principal: Principal, kind: RecordKind) -> None:
     if kind not in DELETE[principal.role]:
-        raise Forbidden(f"a {principal.role.value} may not withdraw {kind.value.replace('_', ' ')} records")
+        raise Forbidden(f"a {principal.role.value} may not withdraw {kind.label} records")
 
 
 def require_admin(principal: Principal, action: str) -> None:
