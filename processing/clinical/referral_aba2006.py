@@ -25,6 +25,7 @@ from processing.clinical.referral import (
     major_injuries,
     partial_at_least,
     strong_airway_signs,
+    trauma,
     unassessed,
 )
 from schemas.clinical_results import GuidelineResult
@@ -70,12 +71,10 @@ def social_needs(inp: ReferralInputs) -> Verdict:
 
 
 def trauma_greatest_risk(inp: ReferralInputs) -> Verdict:
-    major = major_injuries(inp)
-    if isinstance(major, tuple):
-        return major
-    if not major:
-        return False, "no major injury other than the burn recorded"
-    injuries = "; ".join(major)
+    met, reason = trauma(inp)
+    if met is not True:
+        return met, reason
+    injuries = "; ".join(major_injuries(inp))
     risk = inp.secondary.burn_poses_greatest_risk
     if risk is None:
         return None, f"major other injuries ({injuries}): record whether the burn or the trauma is the greater risk"
