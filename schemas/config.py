@@ -1,8 +1,8 @@
 """Typed configuration: every setting burnedge reads, in one place, each documented.
 
 Loaded from a TOML file (`burnedge --config FILE`), then overridden by environment
-variables named BURNEDGE_<SECTION>_<FIELD> (e.g. BURNEDGE_GATEWAY_PORT=8443), then
-by command-line flags.
+variables named BURNEDGE_<SECTION>_<FIELD> (e.g. BURNEDGE_GATEWAY_PORT=8443; lists
+comma-separated), then by command-line flags.
 """
 
 from __future__ import annotations
@@ -42,6 +42,8 @@ class SecurityConfig(Message):
     """Lifetime of a login session (one clinical shift by default)."""
     pairing_code_ttl_s: Annotated[int, msgspec.Meta(ge=30)] = 600
     """How long an unused one-time pairing code stays valid."""
+    paired_device_roles: list[Literal["clinician", "nurse", "admin", "consultant"]] = []
+    """Roles that may log in only from a paired phone (X-Device-Token); empty lets every role use a workstation."""
     argon2_time_cost: Annotated[int, msgspec.Meta(ge=1)] = 3
     """Argon2id iterations."""
     argon2_memory_kib: Annotated[int, msgspec.Meta(ge=8)] = 65_536
@@ -96,10 +98,14 @@ def load_config(path: str | Path | None = None, environ: dict[str, str] | None =
             raise InvalidInput(f"config file {path} is not valid TOML: {exc}") from exc
     env = os.environ if environ is None else environ
     for section, struct in (("gateway", GatewayConfig), ("security", SecurityConfig), ("clinical", ClinicalConfig)):
+        defaults = struct()
         for field in struct.__struct_fields__:
             value = env.get(f"BURNEDGE_{section}_{field}".upper())
-            if value is not None:
-                raw.setdefault(section, {})[field] = value
+            if value is None:
+                continue
+            if isinstance(getattr(defaults, field), list):  # lists come comma-separated
+                value = [item.strip() for item in value.split(",") if item.strip()]
+            raw.setdefault(section, {})[field] = value
     try:
         return msgspec.convert(raw, Config, strict=False)
     except msgspec.ValidationError as exc:

@@ -41,7 +41,7 @@ def render() -> str:
         "Generated from `schemas/config.py` by `python -m schemas.config_docs`; a test keeps it current.",
         "",
         "Settings come from a TOML file (`burnedge --config FILE`, example in `deploy/burnedge.example.toml`),",
-        "then environment variables `BURNEDGE_<SECTION>_<FIELD>` (e.g. `BURNEDGE_GATEWAY_PORT=8443`),",
+        "then environment variables `BURNEDGE_<SECTION>_<FIELD>` (e.g. `BURNEDGE_GATEWAY_PORT=8443`; lists comma-separated),",
         "then command-line flags (`--db`, `--host`, `--port`). Invalid values stop the program with a message.",
         "",
     ]

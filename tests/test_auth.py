@@ -6,6 +6,7 @@ import re
 import threading
 
 import pytest
+from litestar.testing import TestClient
 
 from schemas.accounts import Role
 from schemas.errors import AuthenticationFailed, TooManyAttempts
@@ -288,3 +289,21 @@ def test_an_administrator_is_refused_every_clinical_route(app, client, auth):
     push = {"mutations": [{"mutation_id": uuid7(), "kind": "patient", "id": (pid := uuid7()), "op": "create",
                            "data": patient_body(pid)}]}  # fmt: skip
     assert client.post("/api/v1/sync/push", json=push, headers=auth["admin"]).json()["rejected"] == 1
+
+
+def test_a_clinic_can_require_paired_phones_for_some_roles(tmp_path):
+    import msgspec
+
+    from gateway.app import create_app
+    from schemas.config import Config, GatewayConfig
+    from tests.conftest import FAST_SECURITY
+
+    security = msgspec.structs.replace(FAST_SECURITY, paired_device_roles=["nurse"])
+    app = create_app(Config(gateway=GatewayConfig(database=str(tmp_path / "p.sqlite3")), security=security))
+    with TestClient(app) as c:
+        make_user(app.state.services, "nurse", Role.nurse)
+        make_user(app.state.services, "admin", Role.admin)
+        r = c.post("/api/v1/auth/login", json={"username": "nurse", "password": PASSWORD})
+        assert r.status_code == 401 and "paired phone" in r.json()["detail"]
+        device = _pair(c, login(c, "admin"))
+        login(c, "nurse", device_token=device["device_token"])

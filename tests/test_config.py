@@ -40,3 +40,10 @@ def test_bad_config_is_refused_with_a_reason(tmp_path, text):
 
 def test_the_example_config_is_valid():
     assert load_config(REPO / "deploy" / "burnedge.example.toml", environ={}).gateway.host == "0.0.0.0"
+
+
+def test_list_settings_come_comma_separated_from_the_environment():
+    cfg = load_config(None, environ={"BURNEDGE_SECURITY_PAIRED_DEVICE_ROLES": "clinician, nurse"})
+    assert cfg.security.paired_device_roles == ["clinician", "nurse"]
+    with pytest.raises(InvalidInput):
+        load_config(None, environ={"BURNEDGE_SECURITY_PAIRED_DEVICE_ROLES": "janitor"})

@@ -118,6 +118,8 @@ class AccountService:
             raise AuthenticationFailed("wrong username or password")
         if not row["active"]:
             raise AuthenticationFailed("this account is disabled: ask an administrator")
+        if device_token is None and row["role"] in self.config.paired_device_roles:
+            raise AuthenticationFailed(f"a {row['role']} logs in from a paired phone here: use the clinic's phone app")
         device_id = self._device_for_token(device_token) if device_token else None
         token = secrets.token_urlsafe(32)
         now = utcnow()
