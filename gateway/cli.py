@@ -101,6 +101,19 @@ def cmd_schemas_export(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_gate(args: argparse.Namespace) -> int:
+    from processing.capture.quality import gate_file
+
+    config = _config(args).quality
+    verdicts = []
+    for name in args.files:
+        if not Path(name).is_file():
+            raise NotFound(f"no file {name}")
+        verdicts.append(gate_file(name, config))
+    print(msgspec.json.format(msgspec.json.encode(verdicts), indent=2).decode())
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="burnedge", description="Objective burn assessment at the clinic edge.")
     parser.add_argument("--config", help="TOML configuration file (see docs/configuration.md)")
@@ -118,6 +131,10 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument("--port", type=int, help="TCP port")
     demo.add_argument("--no-serve", action="store_true", help="seed and check, then exit instead of serving")
     demo.set_defaults(func=cmd_demo)
+
+    gate = sub.add_parser("gate", help="quality verdicts for photos, as JSON (no server needed)")
+    gate.add_argument("files", nargs="+", metavar="FILE", help="JPEG, PNG or HEIC photos")
+    gate.set_defaults(func=cmd_gate)
 
     users = sub.add_parser("users", help="manage user accounts").add_subparsers(dest="users_cmd", required=True)
     add = users.add_parser("add", help="create an account (the first administrator, say)")

@@ -77,6 +77,39 @@ class ClinicalConfig(Message):
     """%TBSA from which a child needs formal fluid resuscitation (ABLS)."""
 
 
+class QualityGateConfig(Message):
+    """Thresholds of the instant quality gate; how they were calibrated: docs/quality-gate.md."""
+
+    min_width: Annotated[int, msgspec.Meta(ge=1)] = 800
+    """Smallest long side in pixels (landscape or portrait)."""
+    min_height: Annotated[int, msgspec.Meta(ge=1)] = 600
+    """Smallest short side in pixels."""
+    max_pixels: Annotated[int, msgspec.Meta(ge=1)] = 120_000_000
+    """Larger images are refused before decoding (decompression bombs; phones make at most ~50 MP)."""
+    analysis_long_side: Annotated[int, msgspec.Meta(ge=256)] = 1000
+    """Images are analysed at this long side so thresholds do not depend on resolution."""
+    min_local_sharpness: Annotated[float, msgspec.Meta(ge=0)] = 200.0
+    """Below this central-region Laplacian variance a picture is blurry."""
+    dark_level: Annotated[int, msgspec.Meta(ge=0, le=255)] = 10
+    """Grey level at or below which a pixel counts as clipped dark."""
+    bright_level: Annotated[int, msgspec.Meta(ge=0, le=255)] = 245
+    """Grey level at or above which a pixel counts as clipped bright."""
+    min_mean_intensity: Annotated[float, msgspec.Meta(ge=0, le=255)] = 75.0
+    """Below this mean grey level a picture is too dark."""
+    max_mean_intensity: Annotated[float, msgspec.Meta(ge=0, le=255)] = 185.0
+    """Above this mean grey level a picture is too bright."""
+    max_dark_fraction: Annotated[float, msgspec.Meta(ge=0, le=1)] = 0.25
+    """Above this share of clipped dark pixels a picture is too dark."""
+    max_bright_fraction: Annotated[float, msgspec.Meta(ge=0, le=1)] = 0.10
+    """Above this share of clipped bright pixels a picture is too bright."""
+    marker_dictionary: str = "DICT_4X4_50"
+    """ArUco dictionary of the printed scale marker (an OpenCV name)."""
+    marker_side_mm: Annotated[float, msgspec.Meta(gt=0)] = 20.0
+    """Printed side length of one marker, in mm."""
+    min_marker_side_px: Annotated[float, msgspec.Meta(ge=0)] = 40.0
+    """Below this apparent side in full-resolution pixels the marker is too small for a precise scale."""
+
+
 class Config(Message):
     gateway: GatewayConfig = msgspec.field(default_factory=GatewayConfig)
     """The HTTP gateway and its database."""
@@ -84,6 +117,8 @@ class Config(Message):
     """Sessions, pairing and password hashing."""
     clinical: ClinicalConfig = msgspec.field(default_factory=ClinicalConfig)
     """Thresholds used by the clinical calculators."""
+    quality: QualityGateConfig = msgspec.field(default_factory=QualityGateConfig)
+    """Thresholds of the instant photo quality gate."""
 
 
 def load_config(path: str | Path | None = None, environ: dict[str, str] | None = None) -> Config:
@@ -97,7 +132,9 @@ def load_config(path: str | Path | None = None, environ: dict[str, str] | None =
         except tomllib.TOMLDecodeError as exc:
             raise InvalidInput(f"config file {path} is not valid TOML: {exc}") from exc
     env = os.environ if environ is None else environ
-    for section, struct in (("gateway", GatewayConfig), ("security", SecurityConfig), ("clinical", ClinicalConfig)):
+    sections = (("gateway", GatewayConfig), ("security", SecurityConfig), ("clinical", ClinicalConfig),
+                ("quality", QualityGateConfig))  # fmt: skip
+    for section, struct in sections:
         defaults = struct()
         for field in struct.__struct_fields__:
             value = env.get(f"BURNEDGE_{section}_{field}".upper())

@@ -10,7 +10,12 @@ import inspect
 
 from schemas import config as config_module
 
-SECTIONS = {"GatewayConfig": "gateway", "SecurityConfig": "security", "ClinicalConfig": "clinical"}
+SECTIONS = {
+    "GatewayConfig": "gateway",
+    "SecurityConfig": "security",
+    "ClinicalConfig": "clinical",
+    "QualityGateConfig": "quality",
+}
 
 
 def field_docs() -> dict[str, list[tuple[str, str, str]]]:

@@ -1,0 +1,67 @@
+"""Pictures made by the tests: a textured scene with a printed ArUco marker, and its defects."""
+
+from __future__ import annotations
+
+import io
+import struct
+import zlib
+
+import cv2
+import numpy as np
+from PIL import Image
+from pillow_heif import register_heif_opener
+
+register_heif_opener()
+
+
+def scene(
+    width: int = 1600, height: int = 1200, *, marker_px: int = 120, marker_id: int = 7, seed: int = 1
+) -> np.ndarray:
+    """A skin-coloured, finely textured surface with a marker on a white margin (BGR)."""
+    rng = np.random.default_rng(seed)
+    # Skin photographed at phone resolution: pores and hair give detail at the pixel scale,
+    # on top of broader mottling.
+    fine = cv2.GaussianBlur(rng.normal(0, 1, (height, width)).astype(np.float32), (0, 0), 0.8)
+    coarse = cv2.resize(rng.normal(0, 1, (height // 16, width // 16)).astype(np.float32), (width, height),
+                        interpolation=cv2.INTER_CUBIC)  # fmt: skip
+    texture = 0.7 * fine / fine.std() + 0.5 * coarse / coarse.std()
+    texture = np.clip(0.5 + 0.15 * texture, 0, 1)
+    base = np.array([110, 150, 200], np.float32)  # BGR skin tone
+    img = base[None, None, :] * (0.6 + 0.6 * texture[..., None])
+    img = np.clip(img, 0, 255).astype(np.uint8)
+    if marker_px:
+        dictionary = cv2.aruco.getPredefinedDictionary(cv2.aruco.DICT_4X4_50)
+        marker = cv2.aruco.generateImageMarker(dictionary, marker_id, marker_px)
+        margin = marker_px // 4
+        y, x = height // 8, width // 8
+        img[y - margin : y + marker_px + margin, x - margin : x + marker_px + margin] = 255
+        img[y : y + marker_px, x : x + marker_px] = marker[..., None]
+    return img
+
+
+def jpeg(img: np.ndarray, quality: int = 90) -> bytes:
+    return cv2.imencode(".jpg", img, [cv2.IMWRITE_JPEG_QUALITY, quality])[1].tobytes()
+
+
+def heic(img: np.ndarray) -> bytes:
+    out = io.BytesIO()
+    Image.fromarray(cv2.cvtColor(img, cv2.COLOR_BGR2RGB)).save(out, format="HEIF", quality=85)
+    return out.getvalue()
+
+
+def exposed(img: np.ndarray, gain: float) -> np.ndarray:
+    linear = (img.astype(np.float32) / 255.0) ** 2.2 * gain
+    return (np.clip(linear, 0, 1) ** (1 / 2.2) * 255).round().astype(np.uint8)
+
+
+def png_bomb(side: int = 40_000) -> bytes:
+    """A valid greyscale PNG of side x side black pixels: a few MB that would decode to 1.6 GB."""
+    row = b"\x00" * (side + 1)
+    comp = zlib.compressobj(1)
+    data = b"".join(comp.compress(row) for _ in range(side)) + comp.flush()
+
+    def chunk(kind: bytes, body: bytes) -> bytes:
+        return struct.pack(">I", len(body)) + kind + body + struct.pack(">I", zlib.crc32(kind + body))
+
+    ihdr = struct.pack(">IIBBBBB", side, side, 8, 0, 0, 0, 0)
+    return b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", ihdr) + chunk(b"IDAT", data) + chunk(b"IEND", b"")
