@@ -1,8 +1,9 @@
 """Reading phone pictures for analysis: header first, then only as many pixels as needed.
 
 The header gives the size (and refuses decompression bombs) before any pixel is decoded.
-JPEGs are then decoded at a reduced scale by libjpeg itself (1/2, 1/4, 1/8), which is
-several times cheaper than a full decode followed by a resize.
+JPEGs are then decoded at a reduced scale by libjpeg itself (Pillow's draft mode: 1/2, 1/4,
+1/8), several times cheaper than a full decode followed by a resize. Pillow raises on
+truncated data, so the same decode proves the file is whole.
 """
 
 from __future__ import annotations
@@ -21,8 +22,6 @@ from schemas.errors import InvalidInput
 register_heif_opener()
 # The gate enforces its own, documented pixel limit before decoding; Pillow's warning would be noise.
 Image.MAX_IMAGE_PIXELS = None
-_REDUCED = {1: cv2.IMREAD_GRAYSCALE, 2: cv2.IMREAD_REDUCED_GRAYSCALE_2, 4: cv2.IMREAD_REDUCED_GRAYSCALE_4,
-            8: cv2.IMREAD_REDUCED_GRAYSCALE_8}  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -63,12 +62,7 @@ def load_for_analysis(source: str | Path | bytes, *, long_side: int, max_pixels:
     """Decode a picture in greyscale at about `long_side` pixels on its long side."""
     data = Path(source).read_bytes() if isinstance(source, (str, Path)) else source
     header = read_header(data, max_pixels)
-    if header.format == "JPEG":
-        gray = _decode_jpeg_reduced(data, max(header.width, header.height), long_side)
-    else:
-        gray = _decode_with_pillow(data)
-    if gray is None or gray.size == 0:
-        raise InvalidInput("the image data is truncated or corrupt: it could not be decoded")
+    gray = _decode_gray(data, header, long_side)
     scale = long_side / max(gray.shape)
     if scale < 1.0:
         gray = cv2.resize(
@@ -77,15 +71,15 @@ def load_for_analysis(source: str | Path | bytes, *, long_side: int, max_pixels:
     return AnalysisImage(header=header, gray=gray, scale=max(gray.shape) / max(header.width, header.height))
 
 
-def _decode_jpeg_reduced(data: bytes, full_long_side: int, long_side: int) -> np.ndarray | None:
-    factor = max((f for f in _REDUCED if full_long_side / f >= long_side), default=1)
-    buf = np.frombuffer(data, dtype=np.uint8)
-    return cv2.imdecode(buf, _REDUCED[factor])
-
-
-def _decode_with_pillow(data: bytes) -> np.ndarray:
+def _decode_gray(data: bytes, header: ImageHeader, long_side: int) -> np.ndarray:
     try:
         with Image.open(io.BytesIO(data)) as im:
-            return np.asarray(ImageOps.grayscale(im))
+            if header.format == "JPEG":
+                factor = long_side / max(header.width, header.height)
+                im.draft("L", (max(1, int(header.width * factor)), max(1, int(header.height * factor))))
+            gray = np.asarray(ImageOps.grayscale(im))
     except (OSError, ValueError, SyntaxError) as exc:
         raise InvalidInput(f"the image data is truncated or corrupt: {exc}") from exc
+    if gray.size == 0:
+        raise InvalidInput("the image has no pixels")
+    return gray
