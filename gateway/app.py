@@ -9,13 +9,16 @@ from litestar.openapi import OpenAPIConfig
 
 from gateway import __version__
 from gateway.authentication import session_auth
+from gateway.controllers.assets import AssetController
 from gateway.controllers.auth import AdminController, AuthController
 from gateway.controllers.health import health
 from gateway.controllers.parts import PART_CONTROLLERS
 from gateway.controllers.records import EncounterController, PatientController
 from gateway.controllers.sync import SyncController
+from gateway.controllers.uploads import UploadController
 from gateway.dependencies import Services, provide_services
 from gateway.errors import EXCEPTION_HANDLERS
+from gateway.scheduler import start_scheduler
 from gateway.storage.database import Database
 from schemas.config import Config
 
@@ -33,6 +36,8 @@ def create_app(config: Config) -> Litestar:
             EncounterController,
             *PART_CONTROLLERS,
             SyncController,
+            UploadController,
+            AssetController,
         ],  # fmt: skip
         dependencies={
             "services": Provide(provide_services, sync_to_thread=False, use_cache=True),
@@ -47,6 +52,7 @@ def create_app(config: Config) -> Litestar:
             path="/schema",
         ),
         state=State({"services": services}),
-        on_shutdown=[db.close],
+        on_startup=[lambda app: setattr(app.state, "scheduler", start_scheduler(services))],
+        on_shutdown=[lambda app: app.state.scheduler.shutdown(wait=False), lambda app: db.close()],
         request_max_body_size=config.gateway.max_body_bytes,
     )

@@ -9,8 +9,11 @@ from litestar.datastructures import State
 from litestar.di import NamedDependency
 
 from gateway.services.accounts import AccountService
+from gateway.services.assets import AssetService
 from gateway.services.permissions import Principal
 from gateway.services.records import RecordService
+from gateway.services.uploads import UploadService
+from gateway.storage.blobs import MediaStore
 from gateway.storage.database import Database
 from schemas.config import Config
 from sync.phone_sync import PhoneSync
@@ -23,16 +26,22 @@ class Services:
     accounts: AccountService
     records: RecordService
     phone_sync: PhoneSync
+    assets: AssetService
+    uploads: UploadService
 
     @classmethod
     def build(cls, config: Config, db: Database) -> Services:
         records = RecordService(db, config)
+        store = MediaStore(config.uploads.data_dir or db.path.parent / "burnedge-media")
+        assets = AssetService(db, config, store)
         return cls(
             config=config,
             db=db,
             accounts=AccountService(db, config.security),
             records=records,
             phone_sync=PhoneSync(records, config.gateway.page_max),
+            assets=assets,
+            uploads=UploadService(db, config, store, assets),
         )
 
 

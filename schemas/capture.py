@@ -72,3 +72,78 @@ class QualityVerdict(Frozen):
     """Sentences for the person holding the phone."""
     figures: QualityFigures | None
     """None when the file could not be decoded."""
+
+
+class MediaType(enum.StrEnum):
+    """What a file really is, judged from its bytes (never its name)."""
+
+    jpeg = "image/jpeg"
+    png = "image/png"
+    heic = "image/heic"
+    mp4 = "video/mp4"
+    quicktime = "video/quicktime"
+
+    @property
+    def is_video(self) -> bool:
+        return self in (MediaType.mp4, MediaType.quicktime)
+
+
+class AssetKind(enum.StrEnum):
+    photo = "photo"
+    video = "video"
+    frame = "frame"
+    """A still taken from a video by the gateway."""
+
+
+class CaptureMetadata(Frozen, omit_defaults=True):
+    """What the file says about how it was taken (EXIF or the video container)."""
+
+    captured_at: str | None = None
+    """As the camera wrote it (EXIF DateTimeOriginal has no time zone)."""
+    camera_make: str | None = None
+    camera_model: str | None = None
+    focal_length_mm: float | None = None
+    focal_length_35mm: float | None = None
+    orientation: int | None = None
+    """EXIF orientation (1 = as stored); for video, the rotation in degrees."""
+    width: int | None = None
+    height: int | None = None
+    duration_s: float | None = None
+    video_codec: str | None = None
+    frame_rate: float | None = None
+
+
+class Asset(Frozen):
+    """A stored photo, video or extracted frame, linked to its encounter. The bytes are kept as received."""
+
+    id: str
+    encounter_id: str
+    kind: AssetKind
+    media_type: MediaType
+    sha256: str
+    """Of the original bytes; the file is stored under this name."""
+    size_bytes: int
+    filename: str
+    """The name the phone gave, for people; never used as a path."""
+    metadata: CaptureMetadata
+    verdict: QualityVerdict | None
+    """For photos and frames."""
+    source_asset_id: str | None
+    """For a frame: the video it was taken from."""
+    created_at: str
+    created_by: str
+    device_id: str | None
+
+
+class UploadStatus(Frozen):
+    """An upload as the gateway holds it (GET /api/v1/uploads/{id}); tus clients use HEAD instead."""
+
+    id: str
+    encounter_id: str
+    length: int
+    offset: int
+    state: str
+    """open, complete, failed, terminated or expired."""
+    expires_at: str
+    asset: Asset | None
+    """Once complete: the stored file, with its quality verdict for a photo."""

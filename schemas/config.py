@@ -77,6 +77,17 @@ class ClinicalConfig(Message):
     """%TBSA from which a child needs formal fluid resuscitation (ABLS)."""
 
 
+class UploadConfig(Message):
+    """Resumable uploads of photos and videos (the tus protocol)."""
+
+    data_dir: str = ""
+    """Folder for uploads in progress and stored media; empty means "burnedge-media" beside the database."""
+    max_upload_bytes: Annotated[int, msgspec.Meta(ge=1)] = 2 * 1024**3
+    """Largest photo or video accepted, in bytes (a 1-minute 4K phone video is about 400 MB)."""
+    expiry_s: Annotated[int, msgspec.Meta(ge=60)] = 24 * 3600
+    """An unfinished upload is dropped after this long without completion."""
+
+
 class QualityGateConfig(Message):
     """Thresholds of the instant quality gate; how they were calibrated: docs/quality-gate.md."""
 
@@ -119,6 +130,8 @@ class Config(Message):
     """Thresholds used by the clinical calculators."""
     quality: QualityGateConfig = msgspec.field(default_factory=QualityGateConfig)
     """Thresholds of the instant photo quality gate."""
+    uploads: UploadConfig = msgspec.field(default_factory=UploadConfig)
+    """Resumable photo and video uploads."""
 
 
 def load_config(path: str | Path | None = None, environ: dict[str, str] | None = None) -> Config:
@@ -133,7 +146,7 @@ def load_config(path: str | Path | None = None, environ: dict[str, str] | None =
             raise InvalidInput(f"config file {path} is not valid TOML: {exc}") from exc
     env = os.environ if environ is None else environ
     sections = (("gateway", GatewayConfig), ("security", SecurityConfig), ("clinical", ClinicalConfig),
-                ("quality", QualityGateConfig))  # fmt: skip
+                ("quality", QualityGateConfig), ("uploads", UploadConfig))  # fmt: skip
     for section, struct in sections:
         defaults = struct()
         for field in struct.__struct_fields__:

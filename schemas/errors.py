@@ -97,3 +97,29 @@ class StorageError(BurnedgeError):
     status = 503
     slug = "storage-unavailable"
     title = "Storage unavailable"
+
+
+class Gone(BurnedgeError):
+    status = 410
+    slug = "gone"
+    title = "No longer available"
+
+
+class PayloadTooLarge(BurnedgeError):
+    status = 413
+    slug = "too-large"
+    title = "Too large"
+
+
+class UnsupportedMedia(InvalidInput):
+    status = 415
+    slug = "unsupported-media"
+    title = "Unsupported media"
+
+
+class ChecksumMismatch(BurnedgeError):
+    """tus checksum extension: the body did not match its Upload-Checksum; nothing of it was kept."""
+
+    status = 460
+    slug = "checksum-mismatch"
+    title = "Checksum mismatch"

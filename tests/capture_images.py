@@ -65,3 +65,48 @@ def png_bomb(side: int = 40_000) -> bytes:
 
     ihdr = struct.pack(">IIBBBBB", side, side, 8, 0, 0, 0, 0)
     return b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", ihdr) + chunk(b"IDAT", data) + chunk(b"IEND", b"")
+
+
+def video(
+    path, codec: str = "libx264", seconds: float = 2.0, size: tuple[int, int] = (640, 480), fps: int = 30
+) -> bytes:
+    """A short phone-like clip (camera panning over the textured scene), written with FFmpeg via PyAV."""
+    import av
+
+    w, h = size
+    big = scene(w * 2, h, marker_px=h // 6)
+    with av.open(str(path), "w") as out:
+        stream = out.add_stream(codec, rate=fps)
+        stream.width, stream.height, stream.pix_fmt = w, h, "yuv420p"
+        if codec == "libx265":
+            stream.options = {"x265-params": "log-level=none"}
+        frames = int(seconds * fps)
+        for i in range(frames):
+            x = int(i / max(1, frames - 1) * w)
+            frame = av.VideoFrame.from_ndarray(cv2.cvtColor(big[:, x : x + w], cv2.COLOR_BGR2RGB), format="rgb24")
+            for packet in stream.encode(frame):
+                out.mux(packet)
+        for packet in stream.encode():
+            out.mux(packet)
+    with open(path, "rb") as f:
+        return f.read()
+
+
+def pad_mp4(data: bytes, extra_bytes: int, seed: int = 0) -> bytes:
+    """The same MP4 made larger by an ISO 'free' box of random bytes, which players skip."""
+    payload = np.random.default_rng(seed).integers(0, 256, extra_bytes, dtype=np.uint8).tobytes()
+    return data + struct.pack(">I", len(payload) + 8) + b"free" + payload
+
+
+def jpeg_with_exif(img: np.ndarray) -> bytes:
+    exif = Image.Exif()
+    exif[0x010F] = "TestPhone Inc."  # Make
+    exif[0x0110] = "Model 7"  # Model
+    exif[0x0112] = 6  # Orientation: rotated 90 degrees
+    sub = exif.get_ifd(0x8769)
+    sub[0x9003] = "2026:11:22 10:15:00"  # DateTimeOriginal
+    sub[0x920A] = 4.25  # FocalLength
+    sub[0xA405] = 26  # FocalLengthIn35mmFilm
+    out = io.BytesIO()
+    Image.fromarray(cv2.cvtColor(img, cv2.COLOR_BGR2RGB)).save(out, format="JPEG", quality=90, exif=exif)
+    return out.getvalue()

@@ -96,6 +96,20 @@ def free_port() -> int:
         return s.getsockname()[1]
 
 
+FAST_HASH_ENV = {"BURNEDGE_SECURITY_ARGON2_MEMORY_KIB": "8", "BURNEDGE_SECURITY_ARGON2_TIME_COST": "1",
+                 "BURNEDGE_SECURITY_ARGON2_PARALLELISM": "1"}  # fmt: skip
+
+
+def add_user_cli(db: Path, username: str, role: str) -> None:
+    """Create an account the way an administrator would: with the command line."""
+    r = subprocess.run(
+        [sys.executable, "-m", "gateway.cli", "--db", str(db), "users", "add", "--username", username, "--role", role,
+         "--password-stdin"], input=PASSWORD + "\n", capture_output=True, text=True, cwd=REPO,
+        env={**FAST_HASH_ENV, "PATH": ""},
+    )  # fmt: skip
+    assert r.returncode == 0, r.stderr
+
+
 class GatewayProcess:
     """`burnedge serve` as a real process, talking HTTP on loopback."""
 
@@ -105,8 +119,7 @@ class GatewayProcess:
         self.proc: subprocess.Popen | None = None
 
     def start(self, timeout: float = 30.0) -> GatewayProcess:
-        env = dict(os.environ, BURNEDGE_SECURITY_ARGON2_TIME_COST="1", BURNEDGE_SECURITY_ARGON2_MEMORY_KIB="8",
-                   BURNEDGE_SECURITY_ARGON2_PARALLELISM="1")  # fmt: skip
+        env = {**os.environ, **FAST_HASH_ENV}
         self.proc = subprocess.Popen(
             [sys.executable, "-m", "gateway.cli", "--db", str(self.db), "serve", "--port", str(self.port)],
             env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,

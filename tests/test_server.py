@@ -8,23 +8,13 @@ import sys
 import httpx
 import pytest
 
-from tests.conftest import PASSWORD, REPO, encounter_body, patient_body
+from tests.conftest import PASSWORD, REPO, add_user_cli, encounter_body, patient_body
 
 pytestmark = pytest.mark.server
 
 
-def _add_user(db, username: str, role: str) -> None:
-    r = subprocess.run(
-        [sys.executable, "-m", "gateway.cli", "--db", str(db), "users", "add", "--username", username, "--role", role,
-         "--password-stdin"], input=PASSWORD + "\n", capture_output=True, text=True, cwd=REPO,
-        env={"BURNEDGE_SECURITY_ARGON2_MEMORY_KIB": "8", "BURNEDGE_SECURITY_ARGON2_TIME_COST": "1",
-             "BURNEDGE_SECURITY_ARGON2_PARALLELISM": "1", "PATH": ""},
-    )  # fmt: skip
-    assert r.returncode == 0, r.stderr
-
-
 def test_served_gateway_answers_over_loopback_and_keeps_data_across_restarts(gateway_process):
-    _add_user(gateway_process.db, "clinician", "clinician")
+    add_user_cli(gateway_process.db, "clinician", "clinician")
     gw = gateway_process.start()
     with httpx.Client(base_url=gw.url, timeout=10) as http:
         assert http.get("/health").json()["status"] == "ok"

@@ -36,6 +36,8 @@ DELETE: dict[Role, frozenset[RecordKind]] = {
 }
 # Nurses record fluid given; choosing the formula is a prescription.
 PRESCRIPTION_FIELDS = {RecordKind.resuscitation: ("formula", "custom_ml_per_kg_per_percent")}
+# Who may upload photos and videos of a burn (and read them back).
+CAPTURE = frozenset({Role.clinician, Role.nurse})
 ADMIN_ONLY = frozenset({"manage_users", "manage_devices", "read_audit"})
 
 
@@ -84,3 +86,8 @@ def check_field_rules(principal: Principal, kind: RecordKind, struct, current: R
     for name in fields:
         if msgspec.to_builtins(getattr(struct, name)) != baseline.get(name):
             raise Forbidden(f"a {principal.role.value} may record fluid given but not change {name.replace('_', ' ')}")
+
+
+def require_capture(principal: Principal) -> None:
+    if principal.role not in CAPTURE:
+        raise Forbidden(f"a {principal.role.value} may not upload photos or videos")

@@ -64,8 +64,7 @@ def check(conn: sqlite3.Connection, kind: RecordKind, record_id: str, struct, co
             "$.encounter_id",
             f"encounter_id {struct.encounter_id} does not match the encounter {record_id} in the address",
         )
-    encounter = _require_live(conn, RecordKind.encounter, record_id)
-    _require_live(conn, RecordKind.patient, encounter.data["patient_id"])
+    require_live_encounter(conn, record_id)
     if isinstance(struct, (PrimarySurvey, SecondarySurvey, BurnChart)):
         _not_future(struct.assessed_at, "$.assessed_at", config)
     if isinstance(struct, BurnChart):
@@ -102,6 +101,13 @@ def _require_live(conn: sqlite3.Connection, kind: RecordKind, record_id: str) ->
     if head.meta.deleted:
         raise InvalidInput(f"the {kind.label} {record_id} was withdrawn: records cannot be added to it")
     return head
+
+
+def require_live_encounter(conn: sqlite3.Connection, encounter_id: str) -> Record:
+    """The encounter, if it and its patient exist and are not withdrawn."""
+    encounter = _require_live(conn, RecordKind.encounter, encounter_id)
+    _require_live(conn, RecordKind.patient, encounter.data["patient_id"])
+    return encounter
 
 
 def check_unchanged_links(kind: RecordKind, struct, current: Record) -> None:

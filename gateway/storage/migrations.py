@@ -135,3 +135,45 @@ def m003_audit(db: Database) -> None:
             hash TEXT NOT NULL
         )"""
     )
+
+
+@migrations()
+def m004_uploads_and_assets(db: Database) -> None:
+    db.execute(
+        """
+        CREATE TABLE uploads (
+            id TEXT PRIMARY KEY,
+            encounter_id TEXT NOT NULL,
+            length INTEGER NOT NULL,
+            metadata TEXT NOT NULL,
+            filename TEXT NOT NULL,
+            state TEXT NOT NULL,
+            created_by TEXT NOT NULL,
+            device_id TEXT,
+            created_at TEXT NOT NULL,
+            expires_at TEXT NOT NULL,
+            asset_id TEXT,
+            error TEXT
+        )"""
+    )
+    db.execute("CREATE INDEX uploads_expiry ON uploads (state, expires_at)")
+    db.execute(
+        """
+        CREATE TABLE assets (
+            id TEXT PRIMARY KEY,
+            encounter_id TEXT NOT NULL,
+            kind TEXT NOT NULL,
+            media_type TEXT NOT NULL,
+            sha256 TEXT NOT NULL,
+            size_bytes INTEGER NOT NULL,
+            filename TEXT NOT NULL,
+            metadata TEXT NOT NULL,
+            verdict TEXT,
+            source_asset_id TEXT,
+            created_at TEXT NOT NULL,
+            created_by TEXT NOT NULL,
+            device_id TEXT,
+            UNIQUE (encounter_id, sha256)
+        )"""
+    )
+    db.execute("CREATE INDEX assets_encounter ON assets (encounter_id, kind)")

@@ -1,0 +1,33 @@
+"""Stored photos, videos and frames: their records, quality verdicts and original bytes."""
+
+from __future__ import annotations
+
+from litestar import Controller, get
+from litestar.params import FromPath
+from litestar.response import File
+
+from gateway.dependencies import AuthedRequest, ServicesDep
+from schemas.capture import Asset
+
+
+class AssetController(Controller):
+    path = "/api/v1"
+    tags = ["assets"]
+
+    @get("/assets/{asset_id:str}", sync_to_thread=False, summary="A stored photo, video or frame, with its verdict")
+    def read(self, asset_id: FromPath[str], request: AuthedRequest, services: ServicesDep) -> Asset:
+        return services.assets.get(request.user, asset_id)
+
+    @get("/assets/{asset_id:str}/file", sync_to_thread=True, summary="The original bytes, exactly as uploaded")
+    def download(self, asset_id: FromPath[str], request: AuthedRequest, services: ServicesDep) -> File:
+        asset, path = services.assets.file(request.user, asset_id)
+        return File(path=path, filename=asset.filename, media_type=asset.media_type.value,
+                    headers={"ETag": f'"{asset.sha256}"'})  # fmt: skip
+
+    @get(
+        "/encounters/{encounter_id:str}/assets",
+        sync_to_thread=False,
+        summary="An encounter's photos, videos and frames",
+    )
+    def for_encounter(self, encounter_id: FromPath[str], request: AuthedRequest, services: ServicesDep) -> list[Asset]:
+        return services.assets.for_encounter(request.user, encounter_id)

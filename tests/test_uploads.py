@@ -1,0 +1,194 @@
+"""tus uploads in the real app: the protocol, every kind of bad input, and what gets stored."""
+
+from __future__ import annotations
+
+import base64
+import hashlib
+import os
+
+import pytest
+
+from schemas.ids import uuid7
+from tests.capture_images import heic, jpeg, jpeg_with_exif, png_bomb, scene, video
+from tests.conftest import encounter_body, patient_body
+
+TUS = {"Tus-Resumable": "1.0.0"}
+OCTETS = {"Content-Type": "application/offset+octet-stream"}
+
+
+def meta(**pairs: str) -> str:
+    return ",".join(f"{k} {base64.b64encode(v.encode()).decode()}" for k, v in pairs.items())
+
+
+@pytest.fixture
+def enc(client, auth) -> str:
+    p = patient_body()
+    client.post("/api/v1/patients", json=p, headers=auth["clinician"])
+    e = encounter_body(p["id"])
+    client.post("/api/v1/encounters", json=e, headers=auth["clinician"])
+    return e["id"]
+
+
+def create(client, headers, enc: str, length: int, filename: str = "IMG_0001.JPG"):
+    return client.post("/api/v1/uploads", headers={**headers, **TUS, "Upload-Length": str(length),
+                                                    "Upload-Metadata": meta(encounter_id=enc, filename=filename)})  # fmt: skip
+
+
+def send(client, headers, location: str, data: bytes, offset: int = 0, **extra):
+    return client.patch(
+        location, content=data, headers={**headers, **TUS, **OCTETS, "Upload-Offset": str(offset), **extra}
+    )
+
+
+def upload(client, headers, enc: str, data: bytes, filename: str = "IMG_0001.JPG"):
+    r = create(client, headers, enc, len(data), filename)
+    assert r.status_code == 201, r.text
+    return r.headers["location"], send(client, headers, r.headers["location"], data)
+
+
+def stored_files(services) -> list[str]:
+    root = services.assets.store.root
+    return sorted(str(p.relative_to(root)) for p in root.rglob("*") if p.is_file())
+
+
+def test_options_advertises_the_tus_extensions_without_a_session(client):
+    r = client.options("/api/v1/uploads")
+    assert r.status_code == 204 and r.headers["tus-version"] == "1.0.0"
+    assert {"creation", "termination", "checksum", "expiration"} <= set(r.headers["tus-extension"].split(","))
+    assert "sha256" in r.headers["tus-checksum-algorithm"]
+
+
+def test_a_photo_upload_in_two_pieces_stores_the_original_bytes_with_a_verdict(client, auth, enc, services):
+    h, data = auth["nurse"], jpeg(scene())
+    r = create(client, h, enc, len(data))
+    loc = r.headers["location"]
+    assert r.headers["upload-offset"] == "0" and "upload-expires" in r.headers
+    half = len(data) // 2
+    assert send(client, h, loc, data[:half]).status_code == 204
+    assert client.head(loc, headers={**h, **TUS}).headers["upload-offset"] == str(half)
+    done = send(client, h, loc, data[half:], offset=half)
+    assert done.status_code == 204 and done.headers["burnedge-accepted"] == "true"
+    status = client.get(loc, headers=h).json()
+    asset = status["asset"]
+    assert status["state"] == "complete" and asset["sha256"] == hashlib.sha256(data).hexdigest()
+    assert (
+        asset["media_type"] == "image/jpeg"
+        and asset["verdict"]["accepted"]
+        and asset["verdict"]["file"] == "IMG_0001.JPG"
+    )
+    original = client.get(f"/api/v1/assets/{asset['id']}/file", headers=auth["consultant"])
+    assert original.content == data
+    assert [a["id"] for a in client.get(f"/api/v1/encounters/{enc}/assets", headers=h).json()] == [asset["id"]]
+
+
+def test_the_same_photo_twice_is_stored_once(client, auth, enc, services):
+    data = jpeg(scene(seed=5))
+    first, _ = upload(client, auth["nurse"], enc, data)
+    second, _ = upload(client, auth["nurse"], enc, data, filename="again.jpg")
+    a = client.get(first, headers=auth["nurse"]).json()["asset"]["id"]
+    b = client.get(second, headers=auth["nurse"]).json()["asset"]["id"]
+    assert a == b and len([f for f in stored_files(services) if f.startswith("blobs/")]) == 1
+
+
+def test_exif_capture_metadata_is_kept(client, auth, enc):
+    loc, _ = upload(client, auth["clinician"], enc, jpeg_with_exif(scene()))
+    m = client.get(loc, headers=auth["clinician"]).json()["asset"]["metadata"]
+    assert (m["camera_make"], m["camera_model"], m["focal_length_mm"], m["focal_length_35mm"]) == (
+        "TestPhone Inc.", "Model 7", 4.25, 26.0)  # fmt: skip
+    assert m["orientation"] == 6 and m["captured_at"] == "2026:11:22 10:15:00"
+
+
+def test_heic_photos_and_hevc_and_h264_videos_are_accepted(client, auth, enc, tmp_path):
+    h = auth["clinician"]
+    loc, r = upload(client, h, enc, heic(scene()), "IMG_0002.HEIC")
+    assert r.status_code == 204 and client.get(loc, headers=h).json()["asset"]["media_type"] == "image/heic"
+    for codec, name, expected in (("libx265", "clip.MOV", "hevc"), ("libx264", "clip.mp4", "h264")):
+        data = video(tmp_path / f"{codec}.mp4", codec)
+        loc, r = upload(client, h, enc, data, name)
+        assert r.status_code == 204, r.text
+        asset = client.get(loc, headers=h).json()["asset"]
+        assert asset["kind"] == "video" and asset["metadata"]["video_codec"] == expected
+        assert asset["metadata"]["duration_s"] == pytest.approx(2.0, abs=0.1)
+
+
+@pytest.mark.parametrize(
+    "make, status, words",
+    [
+        (lambda tmp: b"MZ\x90\x00 this is an executable, not a photo" * 50, 415, "neither a photo"),
+        (lambda tmp: jpeg(scene())[:-20000], 422, "truncated"),
+        (lambda tmp: video(tmp / "v.mp4")[:-4000], 422, "truncated"),
+        (lambda tmp: png_bomb(), 422, "larger than any phone photo"),
+    ],
+    ids=["not-an-image-named-jpg", "truncated-jpeg", "truncated-mp4", "decompression-bomb"],
+)
+def test_bad_files_are_refused_at_completion_and_nothing_is_kept(
+    client, auth, enc, services, tmp_path, make, status, words
+):
+    loc, r = upload(client, auth["clinician"], enc, make(tmp_path))
+    assert r.status_code == status and words in r.json()["detail"]
+    assert r.headers["content-type"].startswith("application/problem+json")
+    assert stored_files(services) == []
+    assert client.get(loc, headers=auth["clinician"]).status_code == 410
+    assert client.get(f"/api/v1/encounters/{enc}/assets", headers=auth["clinician"]).json() == []
+
+
+def test_creation_refuses_what_can_be_refused_up_front(client, auth, enc, services):
+    h = auth["clinician"]
+    assert create(client, h, enc, 0).status_code == 422
+    big = services.config.uploads.max_upload_bytes + 1
+    assert create(client, h, enc, big).status_code == 413
+    for name in ("../../etc/passwd", "..\\boot.ini", "a/b.jpg", ".."):
+        r = create(client, h, enc, 100, filename=name)
+        assert r.status_code == 422 and "path" in r.json()["detail"], name
+    assert create(client, h, uuid7(), 100).status_code == 404
+    no_enc = client.post("/api/v1/uploads", headers={**h, **TUS, "Upload-Length": "100"})
+    assert no_enc.status_code == 422 and "encounter_id" in no_enc.json()["detail"]
+    assert client.post("/api/v1/uploads", headers={**h, "Upload-Length": "100"}).status_code == 412
+    assert create(client, auth["consultant"], enc, 100).status_code == 403
+    assert stored_files(services) == []
+
+
+def test_offset_mismatch_content_type_and_overrun_are_refused(client, auth, enc):
+    h, data = auth["clinician"], jpeg(scene())
+    loc = create(client, h, enc, len(data)).headers["location"]
+    assert send(client, h, loc, data[:1000], offset=500).status_code == 409
+    wrong_type = client.patch(
+        loc, content=data, headers={**h, **TUS, "Upload-Offset": "0", "Content-Type": "image/jpeg"}
+    )
+    assert wrong_type.status_code == 415
+    assert send(client, h, loc, data + b"extra bytes").status_code == 413
+    assert client.head(loc, headers={**h, **TUS}).headers["upload-offset"] == "0"
+
+
+def test_checksums_are_verified_and_a_bad_chunk_is_discarded(client, auth, enc):
+    h, data = auth["clinician"], jpeg(scene())
+    loc = create(client, h, enc, len(data)).headers["location"]
+    chunk = data[:4096]
+    wrong = base64.b64encode(hashlib.sha256(b"something else").digest()).decode()
+    bad = send(client, h, loc, chunk, **{"Upload-Checksum": f"sha256 {wrong}"})
+    assert bad.status_code == 460
+    assert client.head(loc, headers={**h, **TUS}).headers["upload-offset"] == "0"
+    good = base64.b64encode(hashlib.sha256(chunk).digest()).decode()
+    assert send(client, h, loc, chunk, **{"Upload-Checksum": f"sha256 {good}"}).status_code == 204
+    assert send(client, h, loc, data[4096:], offset=4096, **{"Upload-Checksum": "md5 AAAA"}).status_code == 422
+
+
+def test_termination_and_expiry(client, auth, enc, services):
+    h = auth["clinician"]
+    loc = create(client, h, enc, 1000).headers["location"]
+    send(client, h, loc, b"\xff\xd8\xff" + b"0" * 100)
+    assert client.delete(loc, headers={**h, **TUS}).status_code == 204
+    assert client.head(loc, headers={**h, **TUS}).status_code == 410
+    stale = create(client, h, enc, 1000).headers["location"]
+    services.db.connection().execute("UPDATE uploads SET expires_at = '2000-01-01T00:00:00+00:00' WHERE state = 'open'")
+    assert client.head(stale, headers={**h, **TUS}).status_code == 410
+    assert services.uploads.expire() == 1
+    assert stored_files(services) == []
+
+
+def test_the_gateway_keeps_serving_while_bad_uploads_fail(client, auth, enc):
+    h = auth["clinician"]
+    for _ in range(3):
+        upload(client, h, enc, os.urandom(5000))
+    assert client.get("/health").status_code == 200
+    assert client.get(f"/api/v1/encounters/{enc}", headers=h).status_code == 200
