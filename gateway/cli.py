@@ -114,6 +114,33 @@ def cmd_gate(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_frames(args: argparse.Namespace) -> int:
+    from processing.capture.frames import extract
+
+    config = _config(args)
+    video = Path(args.video)
+    if not video.is_file():
+        raise NotFound(f"no file {video}")
+    result = extract(video, config.frames, config.quality, name=video.name)
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    listing = []
+    for frame in result.frames:
+        name = f"{video.stem}_{frame.time_s:08.3f}s.jpg"
+        (out / name).write_bytes(frame.jpeg)
+        listing.append({"file": name, "time_s": frame.time_s, "sharpness": frame.sharpness,
+                        "verdict": msgspec.to_builtins(msgspec.structs.replace(frame.verdict, file=name))})  # fmt: skip
+    summary = {"video": str(video), "frames": listing, "decoded": result.decoded,
+               "skipped_near_duplicates_s": result.skipped_duplicates, "seconds": round(result.seconds, 3)}  # fmt: skip
+    (out / "frames.json").write_text(json.dumps(summary, indent=2) + "\n")
+    print(
+        json.dumps(
+            {"out": str(out), "frames": len(listing), "accepted": sum(f["verdict"]["accepted"] for f in listing)}
+        )
+    )
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="burnedge", description="Objective burn assessment at the clinic edge.")
     parser.add_argument("--config", help="TOML configuration file (see docs/configuration.md)")
@@ -135,6 +162,11 @@ def build_parser() -> argparse.ArgumentParser:
     gate = sub.add_parser("gate", help="quality verdicts for photos, as JSON (no server needed)")
     gate.add_argument("files", nargs="+", metavar="FILE", help="JPEG, PNG or HEIC photos")
     gate.set_defaults(func=cmd_gate)
+
+    frames = sub.add_parser("frames", help="extract a multi-view set of frames from a video (no server needed)")
+    frames.add_argument("video", metavar="VIDEO", help="MP4 or MOV, H.264 or HEVC")
+    frames.add_argument("--out", required=True, metavar="DIR", help="folder for the frames and frames.json")
+    frames.set_defaults(func=cmd_frames)
 
     users = sub.add_parser("users", help="manage user accounts").add_subparsers(dest="users_cmd", required=True)
     add = users.add_parser("add", help="create an account (the first administrator, say)")

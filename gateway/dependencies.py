@@ -10,6 +10,7 @@ from litestar.di import NamedDependency
 
 from gateway.services.accounts import AccountService
 from gateway.services.assets import AssetService
+from gateway.services.frames import FrameService
 from gateway.services.permissions import Principal
 from gateway.services.records import RecordService
 from gateway.services.uploads import UploadService
@@ -28,6 +29,7 @@ class Services:
     phone_sync: PhoneSync
     assets: AssetService
     uploads: UploadService
+    frames: FrameService
 
     @classmethod
     def build(cls, config: Config, db: Database) -> Services:
@@ -42,6 +44,7 @@ class Services:
             phone_sync=PhoneSync(records, config.gateway.page_max),
             assets=assets,
             uploads=UploadService(db, config, store, assets),
+            frames=FrameService(db, config, assets),
         )
 
 

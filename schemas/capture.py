@@ -147,3 +147,18 @@ class UploadStatus(Frozen):
     expires_at: str
     asset: Asset | None
     """Once complete: the stored file, with its quality verdict for a photo."""
+
+
+class CaptureReadiness(Frozen):
+    """Whether an encounter's photos and frames are enough for 3D analysis, and what is missing."""
+
+    ready: bool
+    views: int
+    """Photos and frames received."""
+    accepted_views: int
+    marker_views: int
+    """Accepted views in which the scale marker was found."""
+    viewpoint_spread_deg: float | None
+    """Largest angle between viewing directions, from the marker poses; None with fewer than two marker views."""
+    missing: list[str]
+    """What to do, in sentences, when not ready."""

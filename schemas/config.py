@@ -121,6 +121,34 @@ class QualityGateConfig(Message):
     """Below this apparent side in full-resolution pixels the marker is too small for a precise scale."""
 
 
+class FramesConfig(Message):
+    """Turning a video into a multi-view set of stills."""
+
+    max_frames: Annotated[int, msgspec.Meta(ge=1, le=200)] = 15
+    """At most this many frames per video, one per equal slice of its length."""
+    sharpness_step: Annotated[int, msgspec.Meta(ge=1, le=16)] = 4
+    """Sharpness is measured on every n-th pixel of each frame's luma (cheap, and enough to rank frames)."""
+    min_motion_fraction: Annotated[float, msgspec.Meta(ge=0, le=1)] = 0.02
+    """A frame that moved less than this share of the image width since the last kept frame..."""
+    min_difference: Annotated[float, msgspec.Meta(ge=0)] = 3.0
+    """...and differs from it by less than this mean grey level is a near-duplicate, and skipped."""
+    jpeg_quality: Annotated[int, msgspec.Meta(ge=50, le=100)] = 92
+    """JPEG quality of the stored frames."""
+
+
+class ReadinessConfig(Message):
+    """When an encounter's capture set is ready for 3D analysis."""
+
+    min_views: Annotated[int, msgspec.Meta(ge=1)] = 6
+    """Accepted photos or frames needed (the seed's minimum)."""
+    min_marker_views: Annotated[int, msgspec.Meta(ge=0)] = 2
+    """Accepted views that must show the scale marker."""
+    min_spread_deg: Annotated[float, msgspec.Meta(ge=0, le=180)] = 20.0
+    """Smallest angle between the most different viewing directions (from the marker poses)."""
+    default_focal_35mm: Annotated[float, msgspec.Meta(gt=0)] = 26.0
+    """Focal length (35 mm equivalent) assumed when a picture does not say: a phone's main camera."""
+
+
 class Config(Message):
     gateway: GatewayConfig = msgspec.field(default_factory=GatewayConfig)
     """The HTTP gateway and its database."""
@@ -132,6 +160,10 @@ class Config(Message):
     """Thresholds of the instant photo quality gate."""
     uploads: UploadConfig = msgspec.field(default_factory=UploadConfig)
     """Resumable photo and video uploads."""
+    frames: FramesConfig = msgspec.field(default_factory=FramesConfig)
+    """Frames taken from videos."""
+    readiness: ReadinessConfig = msgspec.field(default_factory=ReadinessConfig)
+    """When a capture set is ready for 3D analysis."""
 
 
 def load_config(path: str | Path | None = None, environ: dict[str, str] | None = None) -> Config:
@@ -146,7 +178,8 @@ def load_config(path: str | Path | None = None, environ: dict[str, str] | None =
             raise InvalidInput(f"config file {path} is not valid TOML: {exc}") from exc
     env = os.environ if environ is None else environ
     sections = (("gateway", GatewayConfig), ("security", SecurityConfig), ("clinical", ClinicalConfig),
-                ("quality", QualityGateConfig), ("uploads", UploadConfig))  # fmt: skip
+                ("quality", QualityGateConfig), ("uploads", UploadConfig), ("frames", FramesConfig),
+                ("readiness", ReadinessConfig))  # fmt: skip
     for section, struct in sections:
         defaults = struct()
         for field in struct.__struct_fields__:

@@ -67,10 +67,12 @@ def png_bomb(side: int = 40_000) -> bytes:
     return b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", ihdr) + chunk(b"IDAT", data) + chunk(b"IEND", b"")
 
 
-def video(
-    path, codec: str = "libx264", seconds: float = 2.0, size: tuple[int, int] = (640, 480), fps: int = 30
-) -> bytes:
-    """A short phone-like clip (camera panning over the textured scene), written with FFmpeg via PyAV."""
+def video(path, codec: str = "libx264", seconds: float = 2.0, size: tuple[int, int] = (960, 720), fps: int = 30,
+          *, still: bool = False, blur_except_every: int = 0) -> bytes:  # fmt: skip
+    """A short phone-like clip (camera panning over the textured scene, I/P frames only), via PyAV.
+
+    still: the camera does not move. blur_except_every=n: every frame but each n-th is blurred.
+    """
     import av
 
     w, h = size
@@ -78,12 +80,14 @@ def video(
     with av.open(str(path), "w") as out:
         stream = out.add_stream(codec, rate=fps)
         stream.width, stream.height, stream.pix_fmt = w, h, "yuv420p"
-        if codec == "libx265":
-            stream.options = {"x265-params": "log-level=none"}
+        stream.options = {"x265-params": "log-level=none:bframes=0"} if codec == "libx265" else {"bf": "0"}
         frames = int(seconds * fps)
         for i in range(frames):
-            x = int(i / max(1, frames - 1) * w)
-            frame = av.VideoFrame.from_ndarray(cv2.cvtColor(big[:, x : x + w], cv2.COLOR_BGR2RGB), format="rgb24")
+            x = 0 if still else int(i / max(1, frames - 1) * w)
+            view = big[:, x : x + w]
+            if blur_except_every and i % blur_except_every:
+                view = cv2.GaussianBlur(view, (0, 0), 3)
+            frame = av.VideoFrame.from_ndarray(cv2.cvtColor(view, cv2.COLOR_BGR2RGB), format="rgb24")
             for packet in stream.encode(frame):
                 out.mux(packet)
         for packet in stream.encode():

@@ -116,10 +116,11 @@ def test_heic_photos_and_hevc_and_h264_videos_are_accepted(client, auth, enc, tm
     [
         (lambda tmp: b"MZ\x90\x00 this is an executable, not a photo" * 50, 415, "neither a photo"),
         (lambda tmp: jpeg(scene())[:-20000], 422, "truncated"),
+        (lambda tmp: heic(scene())[:-100], 422, "truncated"),
         (lambda tmp: video(tmp / "v.mp4")[:-4000], 422, "truncated"),
         (lambda tmp: png_bomb(), 422, "larger than any phone photo"),
     ],
-    ids=["not-an-image-named-jpg", "truncated-jpeg", "truncated-mp4", "decompression-bomb"],
+    ids=["not-an-image-named-jpg", "truncated-jpeg", "truncated-heic", "truncated-mp4", "decompression-bomb"],
 )
 def test_bad_files_are_refused_at_completion_and_nothing_is_kept(
     client, auth, enc, services, tmp_path, make, status, words

@@ -7,7 +7,7 @@ from litestar.params import FromPath
 from litestar.response import File
 
 from gateway.dependencies import AuthedRequest, ServicesDep
-from schemas.capture import Asset
+from schemas.capture import Asset, CaptureReadiness
 
 
 class AssetController(Controller):
@@ -31,3 +31,8 @@ class AssetController(Controller):
     )
     def for_encounter(self, encounter_id: FromPath[str], request: AuthedRequest, services: ServicesDep) -> list[Asset]:
         return services.assets.for_encounter(request.user, encounter_id)
+
+    @get("/encounters/{encounter_id:str}/capture-readiness", sync_to_thread=True,
+         summary="Is the capture set ready for 3D analysis, and what is missing")  # fmt: skip
+    def readiness(self, encounter_id: FromPath[str], request: AuthedRequest, services: ServicesDep) -> CaptureReadiness:
+        return services.assets.readiness(request.user, encounter_id)

@@ -22,8 +22,9 @@ from litestar.exceptions import InternalServerException
 from litestar.params import FromPath, HeaderParameter
 
 from gateway.dependencies import AuthedRequest, ServicesDep
+from gateway.scheduler import run_frames_now
 from gateway.services.uploads import UploadState
-from schemas.capture import UploadStatus
+from schemas.capture import AssetKind, UploadStatus
 from schemas.errors import BurnedgeError, ChecksumMismatch, InvalidInput, PayloadTooLarge, UnsupportedMedia
 
 TUS_VERSION = "1.0.0"
@@ -128,6 +129,8 @@ class UploadController(Controller):
         if end == state.length:
             asset = await anyio.to_thread.run_sync(uploads.complete, request.user, upload_id)
             headers["Burnedge-Asset-Id"] = asset.id
+            if asset.kind is AssetKind.video:
+                run_frames_now(request.app.state.scheduler)
             if asset.verdict is not None:
                 headers["Burnedge-Accepted"] = "true" if asset.verdict.accepted else "false"
                 headers["Burnedge-Reasons"] = ",".join(asset.verdict.reasons)

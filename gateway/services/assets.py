@@ -14,8 +14,10 @@ from gateway.storage.blobs import MediaStore, sha256_of
 from gateway.storage.database import Database
 from processing.capture.media import check_photo, check_video, sniff
 from processing.capture.quality import gate_file
+from processing.capture.readiness import View
+from processing.capture.readiness import assess as assess_readiness
 from schemas.base import iso, utcnow
-from schemas.capture import Asset, AssetKind, CaptureMetadata, MediaType, QualityVerdict
+from schemas.capture import Asset, AssetKind, CaptureMetadata, CaptureReadiness, MediaType, QualityVerdict
 from schemas.config import Config
 from schemas.errors import InvalidInput, NotFound
 from schemas.ids import uuid7
@@ -78,6 +80,15 @@ class AssetService:
                          kind="asset", record_id=asset_id, detail=json.dumps({"sha256": sha, "encounter": encounter_id}))  # fmt: skip
             return _asset(conn.execute("SELECT * FROM assets WHERE id = ?", (asset_id,)).fetchone())
 
+    def add_derived(self, principal: Principal, source: Asset, kind: AssetKind, media_type: MediaType, sha: str,
+                    size: int, filename: str, metadata: CaptureMetadata, verdict: QualityVerdict | None) -> Asset:  # fmt: skip
+        """An asset the gateway made from another (a frame from its video); the same bytes once per encounter."""
+        existing = self._find(source.encounter_id, sha)
+        if existing is not None:
+            return existing
+        return self._insert(principal, source.encounter_id, kind, media_type, sha, size, filename, metadata, verdict,
+                            source.id)  # fmt: skip
+
     def _find(self, encounter_id: str, sha: str) -> Asset | None:
         row = (
             self.db.connection()
@@ -101,6 +112,18 @@ class AssetService:
             .fetchall()
         )
         return [_asset(r) for r in rows]
+
+    def readiness(self, principal: Principal, encounter_id: str) -> CaptureReadiness:
+        """Whether the encounter's photos and frames are enough for 3D analysis."""
+        require_read(principal, RecordKind.encounter)
+        with self.db.read() as conn:
+            require_live_encounter(conn, encounter_id)
+        views = [
+            View(verdict=a.verdict, focal_35mm=a.metadata.focal_length_35mm)
+            for a in self.for_encounter(principal, encounter_id)
+            if a.verdict is not None
+        ]
+        return assess_readiness(views, self.config.readiness, self.config.quality)
 
     def file(self, principal: Principal, asset_id: str) -> tuple[Asset, Path]:
         asset = self.get(principal, asset_id)

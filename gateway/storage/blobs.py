@@ -46,6 +46,20 @@ class MediaStore:
         _fsync_dir(final.parent)
         return final
 
+    def put(self, data: bytes) -> tuple[str, Path]:
+        """Store bytes made by the gateway itself (video frames); returns their SHA-256 and path."""
+        sha = hashlib.sha256(data).hexdigest()
+        final = self.blob(sha)
+        if not final.exists():
+            final.parent.mkdir(exist_ok=True)
+            tmp = final.with_name(final.name + ".tmp")
+            with open(tmp, "wb") as f:
+                f.write(data)
+                f.flush()
+                os.fsync(f.fileno())
+            os.replace(tmp, final)
+        return sha, final
+
 
 def sha256_of(path: Path) -> str:
     digest = hashlib.sha256()

@@ -177,3 +177,9 @@ def m004_uploads_and_assets(db: Database) -> None:
         )"""
     )
     db.execute("CREATE INDEX assets_encounter ON assets (encounter_id, kind)")
+
+
+@migrations()
+def m005_video_frames(db: Database) -> None:
+    db.execute("ALTER TABLE assets ADD COLUMN frames_done_at TEXT")
+    db.execute("ALTER TABLE assets ADD COLUMN frames_error TEXT")

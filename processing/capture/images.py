@@ -62,12 +62,15 @@ def load_for_analysis(source: str | Path | bytes, *, long_side: int, max_pixels:
     """Decode a picture in greyscale at about `long_side` pixels on its long side."""
     data = Path(source).read_bytes() if isinstance(source, (str, Path)) else source
     header = read_header(data, max_pixels)
-    gray = _decode_gray(data, header, long_side)
+    return analysis_copy(_decode_gray(data, header, long_side), header, long_side)
+
+
+def analysis_copy(gray: np.ndarray, header: ImageHeader, long_side: int) -> AnalysisImage:
+    """Greyscale pixels (full or partly reduced) brought down to about `long_side`."""
     scale = long_side / max(gray.shape)
     if scale < 1.0:
-        gray = cv2.resize(
-            gray, (round(gray.shape[1] * scale), round(gray.shape[0] * scale)), interpolation=cv2.INTER_AREA
-        )
+        size = (round(gray.shape[1] * scale), round(gray.shape[0] * scale))
+        gray = cv2.resize(gray, size, interpolation=cv2.INTER_AREA)
     return AnalysisImage(header=header, gray=gray, scale=max(gray.shape) / max(header.width, header.height))
 
 

@@ -15,7 +15,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from processing.capture.images import AnalysisImage, load_for_analysis
+from processing.capture.images import AnalysisImage, ImageHeader, analysis_copy, load_for_analysis
 from processing.capture.marker import find_markers
 from schemas.capture import REJECTING, MarkerSighting, QualityFigures, QualityReason, QualityVerdict
 from schemas.config import QualityGateConfig
@@ -45,7 +45,31 @@ def gate_bytes(data: bytes, config: QualityGateConfig, *, name: str) -> QualityV
     except InvalidInput as exc:
         return QualityVerdict(file=name, accepted=False, reasons=[QualityReason.unreadable],
                               guidance=[f"{GUIDANCE[QualityReason.unreadable]} ({exc.detail})"], figures=None)  # fmt: skip
-    markers = _markers(data, image, config)
+
+    def finer() -> AnalysisImage:
+        return load_for_analysis(data, long_side=2 * config.analysis_long_side, max_pixels=config.max_pixels)
+
+    return gate_image(image, config, name=name, finer=finer, start=start)
+
+
+def gate_pixels(gray: np.ndarray, config: QualityGateConfig, *, name: str) -> QualityVerdict:
+    """The gate on pixels already in memory (a video frame's luma), full resolution."""
+    start = time.perf_counter()
+    height, width = gray.shape
+    image = analysis_copy(gray, ImageHeader("frame", width, height, 1), config.analysis_long_side)
+
+    def finer() -> AnalysisImage:
+        return analysis_copy(gray, image.header, 2 * config.analysis_long_side)
+
+    return gate_image(image, config, name=name, finer=finer, start=start)
+
+
+def gate_image(image: AnalysisImage, config: QualityGateConfig, *, name: str, finer, start: float) -> QualityVerdict:
+    markers = find_markers(image.gray, image.scale, config.marker_dictionary)
+    if not markers and image.scale <= 0.5:
+        # A marker far from the camera can be too small at the analysis scale: look once more, twice as large.
+        detail = finer()
+        markers = find_markers(detail.gray, detail.scale, config.marker_dictionary)
     figures = _figures(image, markers, config, time.perf_counter() - start)
     reasons = judge(figures, config)
     return QualityVerdict(file=name, accepted=not (set(reasons) & REJECTING), reasons=reasons,
@@ -67,15 +91,6 @@ def judge(f: QualityFigures, config: QualityGateConfig) -> list[QualityReason]:
     elif max(m.side_px for m in f.markers) < config.min_marker_side_px:
         reasons.append(QualityReason.marker_too_small)
     return reasons
-
-
-def _markers(data: bytes, image: AnalysisImage, config: QualityGateConfig) -> list[MarkerSighting]:
-    found = find_markers(image.gray, image.scale, config.marker_dictionary)
-    if found or image.scale > 0.5:
-        return found
-    # A marker far from the camera can be too small at the analysis scale: look once more, twice as large.
-    finer = load_for_analysis(data, long_side=2 * config.analysis_long_side, max_pixels=config.max_pixels)
-    return find_markers(finer.gray, finer.scale, config.marker_dictionary)
 
 
 def _figures(image: AnalysisImage, markers: list[MarkerSighting], config: QualityGateConfig,
