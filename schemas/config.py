@@ -86,6 +86,8 @@ class UploadConfig(Message):
     """Largest photo or video accepted, in bytes (a 1-minute 4K phone video is about 400 MB)."""
     expiry_s: Annotated[int, msgspec.Meta(ge=60)] = 24 * 3600
     """An unfinished upload is dropped after this long without completion."""
+    min_free_bytes: Annotated[int, msgspec.Meta(ge=0)] = 1024**3
+    """Refuse a new upload that would leave less than this much free disk (the database needs room too)."""
 
 
 class QualityGateConfig(Message):

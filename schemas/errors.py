@@ -123,3 +123,9 @@ class ChecksumMismatch(BurnedgeError):
     status = 460
     slug = "checksum-mismatch"
     title = "Checksum mismatch"
+
+
+class InsufficientStorage(BurnedgeError):
+    status = 507
+    slug = "insufficient-storage"
+    title = "The gateway's disk is nearly full"

@@ -193,3 +193,53 @@ def test_the_gateway_keeps_serving_while_bad_uploads_fail(client, auth, enc):
         upload(client, h, enc, os.urandom(5000))
     assert client.get("/health").status_code == 200
     assert client.get(f"/api/v1/encounters/{enc}", headers=h).status_code == 200
+
+
+def test_an_upload_that_would_fill_the_disk_is_refused_up_front(client, auth, enc, services, monkeypatch):
+    import shutil
+
+    real = shutil.disk_usage(services.assets.store.root)
+    # Pretend the clinic's disk has 1.5 GiB free: a 1 GiB video would leave less than the 1 GiB reserve.
+    monkeypatch.setattr(shutil, "disk_usage", lambda path: real._replace(free=1536 * 1024**2))
+    r = create(client, auth["clinician"], enc, 1024**3, "long.mp4")
+    assert r.status_code == 507 and "free" in r.json()["detail"]
+    assert create(client, auth["clinician"], enc, 100 * 1024**2, "short.mp4").status_code == 201
+    # ...and the open 100 MB upload counts against the next one
+    assert create(client, auth["clinician"], enc, 450 * 1024**2, "other.mp4").status_code == 507
+
+
+def test_terminating_an_upload_while_it_receives_is_refused(client, auth, enc, services):
+    loc = create(client, auth["clinician"], enc, 1000).headers["location"]
+    upload_id = loc.rsplit("/", 1)[1]
+    services.uploads._busy.add(upload_id)  # as if a PATCH were streaming right now
+    try:
+        assert client.delete(loc, headers={**auth["clinician"], **TUS}).status_code == 409
+    finally:
+        services.uploads.end_append(upload_id)
+    assert client.delete(loc, headers={**auth["clinician"], **TUS}).status_code == 204
+
+
+def test_the_same_bytes_finishing_twice_at_once_make_one_asset(services, enc):
+    import threading
+
+    from tests.test_storage import CLINICIAN
+
+    data = jpeg(scene(seed=9))
+    parts = []
+    for i in range(2):
+        part = services.assets.store.parts / f"race-{i}.part"
+        part.write_bytes(data)
+        parts.append(part)
+    barrier, ids = threading.Barrier(2), []
+
+    def finish(part) -> None:
+        barrier.wait()
+        ids.append(services.assets.store_upload(CLINICIAN, enc, part, "same.jpg").id)
+
+    threads = [threading.Thread(target=finish, args=(p,)) for p in parts]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert len(ids) == 2 and ids[0] == ids[1]
+    assert not any(p.exists() for p in parts)

@@ -69,6 +69,12 @@ class AssetService:
         asset_id = uuid7()
         with self.db.write() as conn:
             require_live_encounter(conn, encounter_id)
+            # Two uploads of the same bytes finishing together: the second finds the first's row.
+            existing = conn.execute(
+                "SELECT * FROM assets WHERE encounter_id = ? AND sha256 = ?", (encounter_id, sha)
+            ).fetchone()
+            if existing is not None:
+                return _asset(existing)
             conn.execute(
                 "INSERT INTO assets (id, encounter_id, kind, media_type, sha256, size_bytes, filename, metadata, verdict,"
                 " source_asset_id, created_at, created_by, device_id) VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?)",

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import datetime as dt
 import json
-import os
+import shutil
 import threading
 from dataclasses import dataclass
 from pathlib import Path
@@ -25,7 +25,7 @@ from gateway.storage.database import Database
 from schemas.base import iso, utcnow
 from schemas.capture import Asset
 from schemas.config import Config
-from schemas.errors import BurnedgeError, Conflict, Gone, InvalidInput, NotFound, PayloadTooLarge
+from schemas.errors import BurnedgeError, Conflict, Gone, InsufficientStorage, InvalidInput, NotFound, PayloadTooLarge
 from schemas.ids import uuid7
 
 
@@ -64,6 +64,12 @@ class UploadService:
             raise InvalidInput("the file is empty (Upload-Length 0): take the picture again")
         if length > self.config.uploads.max_upload_bytes:
             raise PayloadTooLarge(f"{length:,} bytes is over the {self.config.uploads.max_upload_bytes:,}-byte limit")
+        free = shutil.disk_usage(self.store.root).free
+        if free - self._outstanding_bytes() - length < self.config.uploads.min_free_bytes:
+            raise InsufficientStorage(
+                f"the gateway has {free // 1024**2:,} MB free, not enough for this {length // 1024**2:,} MB file:"
+                " ask the clinic's IT to free space (older analyses can be archived)"
+            )
         encounter_id = metadata.get("encounter_id")
         if not encounter_id:
             raise InvalidInput("say which encounter the file belongs to: Upload-Metadata encounter_id")
@@ -121,6 +127,9 @@ class UploadService:
     def terminate(self, principal: Principal, upload_id: str) -> None:
         require_capture(principal)
         row = self._live_row(upload_id, allow_complete=False)
+        with self._busy_lock:
+            if upload_id in self._busy:
+                raise Conflict("this upload is receiving bytes right now: terminate it after that request ends")
         self.store.part(row["id"]).unlink(missing_ok=True)
         self._set_state(upload_id, "terminated")
 
@@ -132,12 +141,23 @@ class UploadService:
             .execute("SELECT id FROM uploads WHERE state = 'open' AND expires_at < ?", (now,))
             .fetchall()
         )
+        dropped = 0
         for row in rows:
+            with self._busy_lock:
+                if row["id"] in self._busy:
+                    continue  # still receiving: its PATCH finishes first
             self.store.part(row["id"]).unlink(missing_ok=True)
             self._set_state(row["id"], "expired")
-        return len(rows)
+            dropped += 1
+        return dropped
 
     # ------------------------------------------------------------------------------------
+    def _outstanding_bytes(self) -> int:
+        """What open uploads will still write: their declared lengths minus what they hold."""
+        rows = self.db.connection().execute("SELECT id, length FROM uploads WHERE state = 'open'").fetchall()
+        held = {r["id"]: self.store.part(r["id"]) for r in rows}
+        return sum(r["length"] - (held[r["id"]].stat().st_size if held[r["id"]].exists() else 0) for r in rows)
+
     def _row(self, upload_id: str):
         row = self.db.connection().execute("SELECT * FROM uploads WHERE id = ?", (upload_id,)).fetchone()
         if row is None:
@@ -167,8 +187,3 @@ class UploadService:
         with self.db.write() as conn:
             conn.execute("UPDATE uploads SET state = ?, asset_id = COALESCE(?, asset_id), error = ? WHERE id = ?",
                          (state, asset_id, error, upload_id))  # fmt: skip
-
-
-def fsync_file(path: Path) -> None:
-    with open(path, "rb") as f:
-        os.fsync(f.fileno())
