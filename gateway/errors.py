@@ -14,11 +14,13 @@ from http import HTTPStatus
 from litestar import Request, Response
 from litestar.exceptions import HTTPException, ValidationException
 
-from schemas.errors import BurnedgeError, TooManyAttempts
+from schemas.capture import TUS_VERSION
+from schemas.errors import BurnedgeError, TooManyAttempts, TusVersionUnsupported
 from schemas.problem import FieldProblem, Problem
 
 log = logging.getLogger("burnedge.gateway")
 PROBLEM_JSON = "application/problem+json"
+TUS_PATH = "/api/v1/uploads"
 _TYPE_BASE = "https://burnedge.invalid/problems/"
 
 
@@ -32,6 +34,11 @@ def burnedge_error(request: Request, exc: BurnedgeError) -> Response:
         headers["Retry-After"] = str(exc.retry_after_s)
     if exc.status == 401:
         headers["WWW-Authenticate"] = 'Bearer realm="burnedge"'
+    if request.url.path.startswith(TUS_PATH):
+        # tus clients expect the protocol headers on every answer, errors included.
+        headers["Tus-Resumable"] = TUS_VERSION
+        if isinstance(exc, TusVersionUnsupported):
+            headers["Tus-Version"] = TUS_VERSION
     current = exc.current
     if current is not None and getattr(current, "meta", None) is not None:
         headers["ETag"] = f'"{current.meta.version}"'

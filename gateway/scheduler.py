@@ -1,4 +1,4 @@
-"""Periodic work of the gateway, driven by APScheduler: expired uploads, frames from new videos."""
+"""Periodic work of the gateway, driven by APScheduler: upload housekeeping, frames from new videos."""
 
 from __future__ import annotations
 
@@ -10,23 +10,22 @@ from gateway.dependencies import Services
 from schemas.base import utcnow
 
 log = logging.getLogger("burnedge.scheduler")
-EXPIRE_EVERY_S = 600
-FRAMES_EVERY_S = 60
 FRAMES_JOB = "extract-frames"
 
 
 def start_scheduler(services: Services) -> BackgroundScheduler:
     scheduler = BackgroundScheduler(daemon=True)
+    config = services.config
 
-    def expire_uploads() -> None:
-        dropped = services.uploads.expire()
-        if dropped:
-            log.info("dropped %d expired unfinished uploads", dropped)
+    def upload_housekeeping() -> None:
+        completed, dropped = services.uploads.housekeeping()
+        if completed or dropped:
+            log.info("uploads: completed %d left unrecorded by a restart, dropped %d expired", completed, dropped)
 
-    expire_uploads()
-    scheduler.add_job(expire_uploads, "interval", seconds=EXPIRE_EVERY_S, id="expire-uploads", coalesce=True)
-    # One job, one worker: extractions never run two at a time on the 2-core box.
-    scheduler.add_job(services.frames.extract_pending, "interval", seconds=FRAMES_EVERY_S, id=FRAMES_JOB,
+    # One job each, never two runs at once: extraction especially is heavy on the 2-core box.
+    scheduler.add_job(upload_housekeeping, "interval", seconds=config.uploads.housekeeping_every_s,
+                      id="upload-housekeeping", coalesce=True, max_instances=1, next_run_time=utcnow())  # fmt: skip
+    scheduler.add_job(services.frames.extract_pending, "interval", seconds=config.frames.poll_every_s, id=FRAMES_JOB,
                       coalesce=True, max_instances=1, next_run_time=utcnow())  # fmt: skip
     scheduler.start()
     return scheduler

@@ -6,6 +6,9 @@ import enum
 
 from schemas.base import Frozen
 
+TUS_VERSION = "1.0.0"
+"""The tus protocol version the gateway speaks."""
+
 
 class QualityReason(enum.StrEnum):
     """Machine-readable reasons on a quality verdict."""
@@ -135,6 +138,15 @@ class Asset(Frozen):
     device_id: str | None
 
 
+class UploadPhase(enum.StrEnum):
+    open = "open"
+    """Receiving bytes (or all received and being checked)."""
+    complete = "complete"
+    failed = "failed"
+    terminated = "terminated"
+    expired = "expired"
+
+
 class UploadStatus(Frozen):
     """An upload as the gateway holds it (GET /api/v1/uploads/{id}); tus clients use HEAD instead."""
 
@@ -142,8 +154,7 @@ class UploadStatus(Frozen):
     encounter_id: str
     length: int
     offset: int
-    state: str
-    """open, complete, failed, terminated or expired."""
+    state: UploadPhase
     expires_at: str
     asset: Asset | None
     """Once complete: the stored file, with its quality verdict for a photo."""

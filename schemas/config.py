@@ -88,6 +88,17 @@ class UploadConfig(Message):
     """An unfinished upload is dropped after this long without completion."""
     min_free_bytes: Annotated[int, msgspec.Meta(ge=0)] = 1024**3
     """Refuse a new upload that would leave less than this much free disk (the database needs room too)."""
+    max_video_seconds: Annotated[float, msgspec.Meta(gt=0)] = 600.0
+    """Longer videos are refused: an orbit around a burn takes well under a minute, and frame extraction
+    decodes every frame on the gateway's two cores."""
+    max_photo_bytes: Annotated[int, msgspec.Meta(ge=1)] = 64 * 1024**2
+    """Largest photo (phones write 2-30 MB; a photo is decoded in memory, a video is not)."""
+    max_open_per_user: Annotated[int, msgspec.Meta(ge=1)] = 50
+    """Unfinished uploads one user may hold at once (abandoned ones reserve disk until they expire)."""
+    receive_timeout_s: Annotated[float, msgspec.Meta(gt=0)] = 60.0
+    """A PATCH that sends nothing for this long is treated as a dropped connection, so the upload can resume."""
+    housekeeping_every_s: Annotated[int, msgspec.Meta(ge=10)] = 600
+    """How often finished-but-unrecorded uploads are completed and expired ones dropped."""
 
 
 class QualityGateConfig(Message):
@@ -97,8 +108,8 @@ class QualityGateConfig(Message):
     """Smallest long side in pixels (landscape or portrait)."""
     min_height: Annotated[int, msgspec.Meta(ge=1)] = 600
     """Smallest short side in pixels."""
-    max_pixels: Annotated[int, msgspec.Meta(ge=1)] = 120_000_000
-    """Larger images are refused before decoding (decompression bombs; phones make at most ~50 MP)."""
+    max_pixels: Annotated[int, msgspec.Meta(ge=1)] = 250_000_000
+    """Larger images are refused before decoding (decompression bombs; the largest phone sensors make 200 MP)."""
     analysis_long_side: Annotated[int, msgspec.Meta(ge=256)] = 1000
     """Images are analysed at this long side so thresholds do not depend on resolution."""
     min_local_sharpness: Annotated[float, msgspec.Meta(ge=0)] = 200.0
@@ -122,6 +133,12 @@ class QualityGateConfig(Message):
     min_marker_side_px: Annotated[float, msgspec.Meta(ge=0)] = 40.0
     """Below this apparent side in full-resolution pixels the marker is too small for a precise scale."""
 
+    def __post_init__(self) -> None:
+        if not self.marker_dictionary.startswith("DICT_") or not self.marker_dictionary[5:].replace("_", "").isalnum():
+            raise ValueError(
+                f"marker_dictionary {self.marker_dictionary!r} is not an OpenCV ArUco name such as DICT_4X4_50"
+            )
+
 
 class FramesConfig(Message):
     """Turning a video into a multi-view set of stills."""
@@ -136,6 +153,8 @@ class FramesConfig(Message):
     """...and differs from it by less than this mean grey level is a near-duplicate, and skipped."""
     jpeg_quality: Annotated[int, msgspec.Meta(ge=50, le=100)] = 92
     """JPEG quality of the stored frames."""
+    poll_every_s: Annotated[int, msgspec.Meta(ge=5)] = 60
+    """How often videos still without frames are looked for (each video upload also starts this at once)."""
 
 
 class ReadinessConfig(Message):

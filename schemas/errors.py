@@ -129,3 +129,17 @@ class InsufficientStorage(BurnedgeError):
     status = 507
     slug = "insufficient-storage"
     title = "The gateway's disk is nearly full"
+
+
+class BadRequest(BurnedgeError):
+    """The request itself is malformed (a header the protocol does not allow)."""
+
+    status = 400
+    slug = "bad-request"
+    title = "Bad request"
+
+
+class TusVersionUnsupported(BurnedgeError):
+    status = 412
+    slug = "tus-version"
+    title = "Unsupported tus version"

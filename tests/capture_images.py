@@ -68,19 +68,28 @@ def png_bomb(side: int = 40_000) -> bytes:
 
 
 def video(path, codec: str = "libx264", seconds: float = 2.0, size: tuple[int, int] = (960, 720), fps: int = 30,
-          *, still: bool = False, blur_except_every: int = 0) -> bytes:  # fmt: skip
+          *, still: bool = False, blur_except_every: int = 0, pix_fmt: str = "yuv420p", rotation: int = 0,
+          crf: int | None = None) -> bytes:  # fmt: skip
     """A short phone-like clip (camera panning over the textured scene, I/P frames only), via PyAV.
 
-    still: the camera does not move. blur_except_every=n: every frame but each n-th is blurred.
+    still: the camera does not move (every frame shows pan_scene(size)[:, :width]).
+    blur_except_every=n: every frame but each n-th is blurred. pix_fmt: "yuv420p10le" with libx265
+    gives 10-bit video like an iPhone's HDR HEVC. rotation: the display rotation tag, degrees
+    counter-clockwise (an iPhone held upright writes -90). crf: the encoder's quality (lower is
+    better; x264 defaults to 23, x265 to 28, which softens frames below the gate's threshold).
     """
     import av
 
     w, h = size
-    big = scene(w * 2, h, marker_px=h // 6)
+    big = pan_scene(size)
     with av.open(str(path), "w") as out:
         stream = out.add_stream(codec, rate=fps)
-        stream.width, stream.height, stream.pix_fmt = w, h, "yuv420p"
+        stream.width, stream.height, stream.pix_fmt = w, h, pix_fmt
         stream.options = {"x265-params": "log-level=none:bframes=0"} if codec == "libx265" else {"bf": "0"}
+        if crf is not None:
+            stream.options = {**stream.options, "crf": str(crf)}
+        if rotation:
+            stream.set_display_rotation(rotation)
         frames = int(seconds * fps)
         for i in range(frames):
             x = 0 if still else int(i / max(1, frames - 1) * w)
@@ -114,3 +123,9 @@ def jpeg_with_exif(img: np.ndarray) -> bytes:
     out = io.BytesIO()
     Image.fromarray(cv2.cvtColor(img, cv2.COLOR_BGR2RGB)).save(out, format="JPEG", quality=90, exif=exif)
     return out.getvalue()
+
+
+def pan_scene(size: tuple[int, int]) -> np.ndarray:
+    """The scene a video() of this size pans over: twice its width, the marker a sixth of its height (BGR)."""
+    w, h = size
+    return scene(w * 2, h, marker_px=h // 6)

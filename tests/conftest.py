@@ -115,11 +115,13 @@ class GatewayProcess:
 
     def __init__(self, db: Path, port: int):
         self.db, self.port = db, port
+        self.env: dict[str, str] = {}
+        """Extra BURNEDGE_* settings for the process."""
         self.url = f"http://127.0.0.1:{port}"
         self.proc: subprocess.Popen | None = None
 
     def start(self, timeout: float = 30.0) -> GatewayProcess:
-        env = {**os.environ, **FAST_HASH_ENV}
+        env = {**os.environ, **FAST_HASH_ENV, **self.env}
         self.proc = subprocess.Popen(
             [sys.executable, "-m", "gateway.cli", "--db", str(self.db), "serve", "--port", str(self.port)],
             env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,

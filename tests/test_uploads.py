@@ -90,6 +90,13 @@ def test_the_same_photo_twice_is_stored_once(client, auth, enc, services):
     assert a == b and len([f for f in stored_files(services) if f.startswith("blobs/")]) == 1
 
 
+def test_phone_jpegs_with_data_after_the_image_are_accepted(client, auth, enc):
+    # Samsung appends SEF trailers, Pixel "motion photos" a whole MP4, after the JPEG's end marker.
+    for trailer in (b"SEFH\x00\x00" + b"\x01" * 300 + b"SEFT", b"\x00\x00\x00\x18ftypmp42" + b"\x00" * 5000):
+        _, r = upload(client, auth["clinician"], enc, jpeg(scene(seed=len(trailer))) + trailer)
+        assert r.status_code == 204 and r.headers["burnedge-accepted"] == "true"
+
+
 def test_exif_capture_metadata_is_kept(client, auth, enc):
     loc, _ = upload(client, auth["clinician"], enc, jpeg_with_exif(scene()))
     m = client.get(loc, headers=auth["clinician"]).json()["asset"]["metadata"]
@@ -171,7 +178,7 @@ def test_checksums_are_verified_and_a_bad_chunk_is_discarded(client, auth, enc):
     assert client.head(loc, headers={**h, **TUS}).headers["upload-offset"] == "0"
     good = base64.b64encode(hashlib.sha256(chunk).digest()).decode()
     assert send(client, h, loc, chunk, **{"Upload-Checksum": f"sha256 {good}"}).status_code == 204
-    assert send(client, h, loc, data[4096:], offset=4096, **{"Upload-Checksum": "md5 AAAA"}).status_code == 422
+    assert send(client, h, loc, data[4096:], offset=4096, **{"Upload-Checksum": "md5 AAAA"}).status_code == 400
 
 
 def test_termination_and_expiry(client, auth, enc, services):
@@ -183,7 +190,7 @@ def test_termination_and_expiry(client, auth, enc, services):
     stale = create(client, h, enc, 1000).headers["location"]
     services.db.connection().execute("UPDATE uploads SET expires_at = '2000-01-01T00:00:00+00:00' WHERE state = 'open'")
     assert client.head(stale, headers={**h, **TUS}).status_code == 410
-    assert services.uploads.expire() == 1
+    assert services.uploads.housekeeping() == (0, 1)
     assert stored_files(services) == []
 
 
@@ -210,12 +217,9 @@ def test_an_upload_that_would_fill_the_disk_is_refused_up_front(client, auth, en
 
 def test_terminating_an_upload_while_it_receives_is_refused(client, auth, enc, services):
     loc = create(client, auth["clinician"], enc, 1000).headers["location"]
-    upload_id = loc.rsplit("/", 1)[1]
-    services.uploads._busy.add(upload_id)  # as if a PATCH were streaming right now
-    try:
+    with services.uploads.claim(loc.rsplit("/", 1)[1]):  # as if a PATCH were streaming right now
         assert client.delete(loc, headers={**auth["clinician"], **TUS}).status_code == 409
-    finally:
-        services.uploads.end_append(upload_id)
+        assert services.uploads.housekeeping() == (0, 0)
     assert client.delete(loc, headers={**auth["clinician"], **TUS}).status_code == 204
 
 
@@ -243,3 +247,102 @@ def test_the_same_bytes_finishing_twice_at_once_make_one_asset(services, enc):
         t.join()
     assert len(ids) == 2 and ids[0] == ids[1]
     assert not any(p.exists() for p in parts)
+
+
+def test_a_full_upload_left_unrecorded_by_a_crash_is_completed_on_head_or_by_housekeeping(client, auth, enc, services):
+    h, data = auth["nurse"], jpeg(scene(seed=11))
+    for finish_by in ("head", "housekeeping"):
+        loc = create(client, h, enc, len(data), f"{finish_by}.jpg").headers["location"]
+        # the bytes all reached the disk, then the gateway died before recording the photo
+        services.uploads.store.part(loc.rsplit("/", 1)[1]).write_bytes(data)
+        if finish_by == "head":
+            r = client.head(loc, headers={**h, **TUS})
+            assert r.headers["upload-offset"] == str(len(data))
+        else:
+            assert services.uploads.housekeeping() == (1, 0)
+        status = client.get(loc, headers=h).json()
+        assert status["state"] == "complete" and status["asset"]["verdict"]["accepted"]
+        data = jpeg(scene(seed=12))
+
+
+def test_nothing_can_touch_an_upload_while_it_completes(client, auth, enc, services):
+    h, data = auth["nurse"], jpeg(scene())
+    loc = create(client, h, enc, len(data)).headers["location"]
+    with services.uploads.claim(loc.rsplit("/", 1)[1]):  # as if its last PATCH were being checked now
+        assert send(client, h, loc, b"", offset=0).status_code == 409
+        assert client.delete(loc, headers={**h, **TUS}).status_code == 409
+
+
+def test_an_upload_belongs_to_its_sender_or_their_phone(client, auth, enc, services):
+    from schemas.accounts import Role
+    from tests.conftest import login, make_user
+
+    make_user(services, "nurse.two", Role.nurse)
+    other = login(client, "nurse.two")
+    loc = create(client, auth["nurse"], enc, 1000).headers["location"]
+    assert client.head(loc, headers={**other, **TUS}).status_code == 403
+    assert send(client, other, loc, b"\xff\xd8\xff").status_code == 403
+    assert client.delete(loc, headers={**other, **TUS}).status_code == 403
+    for role in ("consultant", "admin"):
+        assert client.head(loc, headers={**auth[role], **TUS}).status_code == 403
+
+
+def test_tus_client_variants_are_understood(client, auth, enc):
+    h, data = auth["nurse"], jpeg(scene(seed=21))
+    r = client.post("/api/v1/uploads", headers={**h, **TUS, "Upload-Length": str(len(data)),
+                                                 "Upload-Metadata": meta(encounter_id=enc, fileName="IMG_7.JPG")})  # fmt: skip
+    loc = r.headers["location"]
+    assert loc.startswith("http://") and loc.endswith(r.headers["location"].rsplit("/", 1)[1])
+    # a client without PATCH sends POST with X-HTTP-Method-Override (tus-java-client does on old JREs)
+    done = client.post(
+        loc, content=data, headers={**h, **TUS, **OCTETS, "Upload-Offset": "0", "X-HTTP-Method-Override": "PATCH"}
+    )
+    assert done.status_code == 204 and done.headers["burnedge-accepted"] == "true"
+    assert client.get(loc, headers=h).json()["asset"]["filename"] == "IMG_7.JPG"
+    old = client.post("/api/v1/uploads", headers={**h, "Tus-Resumable": "0.2.2", "Upload-Length": "10"})
+    assert old.status_code == 412 and old.headers["tus-version"] == "1.0.0" and old.headers["tus-resumable"] == "1.0.0"
+
+
+def test_a_whole_file_checksum_in_the_metadata_is_checked(client, auth, enc, services):
+    h, data = auth["nurse"], jpeg(scene(seed=22))
+    good = hashlib.sha256(data).hexdigest()
+    for checksum, status in ((f"sha256 {hashlib.sha256(b'other').hexdigest()}", 460), (f"sha256 {good}", 204)):
+        r = client.post("/api/v1/uploads", headers={**h, **TUS, "Upload-Length": str(len(data)),
+                                                     "Upload-Metadata": meta(encounter_id=enc, checksum=checksum)})  # fmt: skip
+        assert send(client, h, r.headers["location"], data).status_code == status
+    assert len([f for f in stored_files(services) if f.startswith("blobs/")]) == 1
+
+
+def test_photos_over_the_photo_limit_are_refused(client, auth, enc, services):
+    import msgspec
+
+    normal = services.assets.config
+    services.assets.config = msgspec.structs.replace(
+        normal, uploads=msgspec.structs.replace(normal.uploads, max_photo_bytes=10_000)
+    )
+    try:
+        _, r = upload(client, auth["nurse"], enc, jpeg(scene()))
+    finally:
+        services.assets.config = normal
+    assert r.status_code == 413 and stored_files(services) == []
+
+
+def test_the_same_photo_for_two_encounters_is_two_assets_one_file(client, auth, enc, services):
+    h, data = auth["clinician"], jpeg(scene(seed=23))
+    p = patient_body()
+    client.post("/api/v1/patients", json=p, headers=h)
+    second = encounter_body(p["id"])
+    client.post("/api/v1/encounters", json=second, headers=h)
+    a, _ = upload(client, h, enc, data)
+    b, _ = upload(client, h, second["id"], data)
+    ids = {client.get(x, headers=h).json()["asset"]["id"] for x in (a, b)}
+    assert len(ids) == 2 and len([f for f in stored_files(services) if f.startswith("blobs/")]) == 1
+
+
+def test_an_encounter_withdrawn_during_the_upload_leaves_no_file(client, auth, enc, services):
+    h, data = auth["clinician"], jpeg(scene(seed=24))
+    loc = create(client, h, enc, len(data)).headers["location"]
+    client.delete(f"/api/v1/encounters/{enc}", params={"reason": "wrong patient"}, headers={**h, "If-Match": '"1"'})
+    r = send(client, h, loc, data)
+    assert r.status_code == 422 and "withdrawn" in r.json()["detail"]
+    assert [f for f in stored_files(services) if f.startswith("blobs/")] == []

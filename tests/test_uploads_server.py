@@ -132,18 +132,16 @@ def test_a_500_mb_video_streams_to_disk_without_raising_memory(served, tmp_path)
     streamed = size - MB
     with open(clip, "rb") as f:
         # All but the last MiB in one request: the streaming alone, before completion's checks.
-        r = httpx.patch(
-            gw.url + loc, content=_limited(f, streamed), timeout=120, headers={**patch, "Upload-Offset": "0"}
-        )
+        r = httpx.patch(loc, content=_limited(f, streamed), timeout=120, headers={**patch, "Upload-Offset": "0"})
         assert r.status_code == 204 and r.headers["upload-offset"] == str(streamed), r.text
         streaming_peak = peak[0]
-        r = httpx.patch(gw.url + loc, content=f.read(), timeout=120, headers={**patch, "Upload-Offset": str(streamed)})
+        r = httpx.patch(loc, content=f.read(), timeout=120, headers={**patch, "Upload-Offset": str(streamed)})
     done.set()
     sampler.join()
     assert r.status_code == 204 and "burnedge-asset-id" in r.headers, r.text
     print(f"gateway RSS {before / 1024:.1f} MB before; peak {streaming_peak / 1024:.1f} MB while streaming "
           f"{streamed / MB:.0f} MB; {peak[0] / 1024:.1f} MB at completion (hash, video checks)")  # fmt: skip
-    assert (streaming_peak - before) / 1024 < 4, "streaming an upload must not hold it in memory"
+    assert (streaming_peak - before) / 1024 < 6, "streaming an upload must not hold it in memory"
     assert (peak[0] - before) / 1024 < 32
 
 
@@ -154,3 +152,34 @@ def _limited(f, n: int):
             return
         n -= len(chunk)
         yield chunk
+
+
+def test_a_stalled_patch_lets_go_of_the_upload_so_the_phone_can_resume(gateway_process, tmp_path):
+    import base64
+    import socket
+
+    gateway_process.env["BURNEDGE_UPLOADS_RECEIVE_TIMEOUT_S"] = "1"
+    add_user_cli(gateway_process.db, "nurse", "nurse")
+    gw = gateway_process.start()
+    token = httpx.post(gw.url + "/api/v1/auth/login", json={"username": "nurse", "password": PASSWORD}).json()
+    headers = {"Authorization": f"Bearer {token['access_token']}"}
+    p = patient_body()
+    httpx.post(gw.url + "/api/v1/patients", json=p, headers=headers)
+    e = encounter_body(p["id"])
+    httpx.post(gw.url + "/api/v1/encounters", json=e, headers=headers)
+    data = jpeg(scene())
+    tus = {"Tus-Resumable": "1.0.0"}
+    meta = "encounter_id " + base64.b64encode(e["id"].encode()).decode()
+    loc = httpx.post(gw.url + "/api/v1/uploads", headers={**headers, **tus, "Upload-Length": str(len(data)),
+                                                           "Upload-Metadata": meta}).headers["location"]  # fmt: skip
+    path = "/" + loc.split("/", 3)[3]
+    with socket.create_connection(("127.0.0.1", gw.port)) as raw:  # a phone that goes silent mid-request
+        raw.sendall((f"PATCH {path} HTTP/1.1\r\nHost: 127.0.0.1\r\nAuthorization: {headers['Authorization']}\r\n"
+                     f"Tus-Resumable: 1.0.0\r\nUpload-Offset: 0\r\nContent-Type: application/offset+octet-stream\r\n"
+                     f"Content-Length: {len(data)}\r\n\r\n").encode() + data[:5000])  # fmt: skip
+        time.sleep(2.5)
+        offset = httpx.head(loc, headers={**headers, **tus}).headers["upload-offset"]
+        assert offset == "5000"
+        r = httpx.patch(loc, content=data[5000:], headers={**headers, **tus, "Upload-Offset": "5000",
+                                                            "Content-Type": "application/offset+octet-stream"})  # fmt: skip
+        assert r.status_code == 204 and r.headers["burnedge-accepted"] == "true"

@@ -1,8 +1,9 @@
 """Resumable uploads over the tus 1.0 protocol (core, creation, termination, checksum, expiration).
 
 Existing mobile tus clients work unchanged: send the session token as a header, the
-encounter in Upload-Metadata (`encounter_id`, plus `filename`), and the bytes in PATCHes.
-The last PATCH's answer carries the stored asset and its quality verdict in headers
+encounter in Upload-Metadata (`encounter_id`, plus `filename`), and the bytes in PATCHes
+(or POSTs with X-HTTP-Method-Override, for clients on platforms without PATCH). The last
+PATCH's answer carries the stored asset and its quality verdict in headers
 (Burnedge-Asset-Id, Burnedge-Accepted, Burnedge-Reasons); GET on the upload gives it all.
 """
 
@@ -13,6 +14,7 @@ import binascii
 import hashlib
 import os
 from email.utils import format_datetime
+from pathlib import Path
 from typing import Annotated
 
 import anyio
@@ -24,17 +26,19 @@ from litestar.params import FromPath, HeaderParameter
 from gateway.dependencies import AuthedRequest, ServicesDep
 from gateway.scheduler import run_frames_now
 from gateway.services.uploads import UploadState
-from schemas.capture import AssetKind, UploadStatus
-from schemas.errors import BurnedgeError, ChecksumMismatch, InvalidInput, PayloadTooLarge, UnsupportedMedia
+from schemas.capture import TUS_VERSION, AssetKind, UploadStatus
+from schemas.errors import (
+    BadRequest,
+    ChecksumMismatch,
+    InvalidInput,
+    PayloadTooLarge,
+    TusVersionUnsupported,
+    UnsupportedMedia,
+)
 
-TUS_VERSION = "1.0.0"
 CHECKSUMS = {"sha256": hashlib.sha256, "sha1": hashlib.sha1}
-
-
-class TusVersionUnsupported(BurnedgeError):
-    status = 412
-    slug = "tus-version"
-    title = "Unsupported tus version"
+WRITE_BATCH = 256 * 1024
+"""Bytes gathered before each write to disk, which runs off the event loop."""
 
 
 def _require_tus(request: Request) -> None:
@@ -59,11 +63,11 @@ def _checksum(header: str | None) -> tuple[str, bytes] | None:
         return None
     algo, _, value = header.strip().partition(" ")
     if algo not in CHECKSUMS:
-        raise InvalidInput(f"checksum algorithm {algo!r} is not supported: use {' or '.join(CHECKSUMS)}")
+        raise BadRequest(f"checksum algorithm {algo!r} is not supported: use {' or '.join(CHECKSUMS)}")
     try:
         return algo, base64.b64decode(value, validate=True)
     except binascii.Error as exc:
-        raise InvalidInput("Upload-Checksum value is not base64") from exc
+        raise BadRequest("Upload-Checksum value is not base64") from exc
 
 
 def _headers(state: UploadState, offset: int | None = None) -> dict[str, str]:
@@ -99,7 +103,8 @@ class UploadController(Controller):
     ) -> Response[None]:  # fmt: skip
         _require_tus(request)
         state = services.uploads.create(request.user, upload_length, parse_metadata(upload_metadata))
-        return Response(None, status_code=201, headers={**_headers(state), "Location": f"{self.path}/{state.id}"})
+        location = f"{str(request.base_url).rstrip('/')}{self.path}/{state.id}"
+        return Response(None, status_code=201, headers={**_headers(state), "Location": location})
 
     @head("/{upload_id:str}", sync_to_thread=True, summary="How many bytes the gateway holds")
     def offset(self, upload_id: FromPath[str], request: AuthedRequest, services: ServicesDep) -> Response[None]:
@@ -114,27 +119,23 @@ class UploadController(Controller):
         upload_offset: Annotated[int, HeaderParameter(name="Upload-Offset", ge=0)],
         upload_checksum: Annotated[str | None, HeaderParameter(name="Upload-Checksum")] = None,
     ) -> Response[None]:  # fmt: skip
-        _require_tus(request)
-        if request.headers.get("content-type") != "application/offset+octet-stream":
-            raise UnsupportedMedia("send the bytes as Content-Type: application/offset+octet-stream")
-        checksum = _checksum(upload_checksum)
-        uploads = services.uploads
-        part, state = await anyio.to_thread.run_sync(uploads.begin_append, request.user, upload_id, upload_offset)
-        try:
-            written = await _receive(request, part, upload_offset, state.length, checksum)
-        finally:
-            uploads.end_append(upload_id)
-        end = upload_offset + written
-        headers = _headers(state, end)
-        if end == state.length:
-            asset = await anyio.to_thread.run_sync(uploads.complete, request.user, upload_id)
-            headers["Burnedge-Asset-Id"] = asset.id
-            if asset.kind is AssetKind.video:
-                run_frames_now(request.app.state.scheduler)
-            if asset.verdict is not None:
-                headers["Burnedge-Accepted"] = "true" if asset.verdict.accepted else "false"
-                headers["Burnedge-Reasons"] = ",".join(asset.verdict.reasons)
-        return Response(None, status_code=204, headers=headers)
+        return await _append(request, services, upload_id, upload_offset, upload_checksum)
+
+    @post("/{upload_id:str}", status_code=204, request_max_body_size=None, include_in_schema=False)
+    async def overridden(
+        self, upload_id: FromPath[str], request: AuthedRequest, services: ServicesDep,
+        method: Annotated[str, HeaderParameter(name="X-HTTP-Method-Override")],
+        upload_offset: Annotated[int | None, HeaderParameter(name="Upload-Offset", ge=0)] = None,
+        upload_checksum: Annotated[str | None, HeaderParameter(name="Upload-Checksum")] = None,
+    ) -> Response[None]:  # fmt: skip
+        """tus clients on platforms without PATCH (or DELETE) send a POST that names the method."""
+        if method.upper() == "PATCH" and upload_offset is not None:
+            return await _append(request, services, upload_id, upload_offset, upload_checksum)
+        if method.upper() == "DELETE":
+            _require_tus(request)
+            await anyio.to_thread.run_sync(services.uploads.terminate, request.user, upload_id)
+            return Response(None, status_code=204, headers={"Tus-Resumable": TUS_VERSION})
+        raise BadRequest("X-HTTP-Method-Override must be PATCH (with Upload-Offset) or DELETE")
 
     @delete("/{upload_id:str}", sync_to_thread=True, status_code=204, summary="Abandon an upload (tus termination)")
     def terminate(self, upload_id: FromPath[str], request: AuthedRequest, services: ServicesDep) -> Response[None]:
@@ -147,35 +148,70 @@ class UploadController(Controller):
         state = services.uploads.status(request.user, upload_id)
         asset = services.assets.get(request.user, state.asset_id) if state.asset_id else None
         return UploadStatus(id=state.id, encounter_id=state.encounter_id, length=state.length, offset=state.offset,
-                            state=state.state, expires_at=state.expires_at.isoformat(), asset=asset)  # fmt: skip
+                            state=state.phase, expires_at=state.expires_at.isoformat(), asset=asset)  # fmt: skip
 
 
-async def _receive(request: Request, part, offset: int, length: int, checksum: tuple[str, bytes] | None) -> int:
+async def _append(
+    request: Request, services, upload_id: str, offset: int, checksum_header: str | None
+) -> Response[None]:
+    _require_tus(request)
+    if request.headers.get("content-type") != "application/offset+octet-stream":
+        raise UnsupportedMedia("send the bytes as Content-Type: application/offset+octet-stream")
+    checksum = _checksum(checksum_header)
+    uploads = services.uploads
+    with uploads.claim(upload_id):  # held until completion is over
+        part, state = await anyio.to_thread.run_sync(uploads.open_for_append, request.user, upload_id, offset)
+        timeout = services.config.uploads.receive_timeout_s
+        written = await _receive(request, part, offset, state.length, checksum, timeout)
+        end = offset + written
+        headers = _headers(state, end)
+        if end == state.length:
+            asset = await anyio.to_thread.run_sync(uploads.complete, request.user, upload_id)
+            headers["Burnedge-Asset-Id"] = asset.id
+            if asset.kind is AssetKind.video:
+                run_frames_now(request.app.state.scheduler)
+            if asset.verdict is not None:
+                headers["Burnedge-Accepted"] = "true" if asset.verdict.accepted else "false"
+                headers["Burnedge-Reasons"] = ",".join(asset.verdict.reasons)
+    return Response(None, status_code=204, headers=headers)
+
+
+async def _receive(request: Request, part: Path, offset: int, length: int, checksum: tuple[str, bytes] | None,
+                   timeout: float) -> int:  # fmt: skip
     """Stream the body into the part file from `offset`; returns the bytes kept.
 
     A checksummed body is all or nothing; an unchecked one keeps what arrived before a
-    dropped connection, which tus then resumes from.
+    dropped or stalled connection, which tus then resumes from.
     """
     digest = CHECKSUMS[checksum[0]]() if checksum else None
-    written = 0
-    disconnected = False
+    written, pending, dropped = 0, [], False
+    chunks = request.stream().__aiter__()
     with open(part, "r+b") as f:
         f.seek(offset)
         try:
-            async for chunk in request.stream():
-                if offset + written + len(chunk) > length:
+            while True:
+                try:
+                    with anyio.fail_after(timeout):
+                        chunk = await chunks.__anext__()
+                except StopAsyncIteration:
+                    break
+                if offset + written + sum(map(len, pending)) + len(chunk) > length:
                     f.truncate(offset)
                     raise PayloadTooLarge(
                         f"more bytes than the declared Upload-Length of {length}: nothing of this request kept"
                     )
-                f.write(chunk)
-                written += len(chunk)
+                pending.append(chunk)
                 if digest is not None:
                     digest.update(chunk)
-        except InternalServerException:  # Litestar's "client disconnected prematurely"
-            disconnected = True
-        mismatch = digest is not None and not disconnected and digest.digest() != checksum[1]
-        if mismatch or (digest is not None and disconnected):
+                if sum(map(len, pending)) >= WRITE_BATCH:
+                    written += await anyio.to_thread.run_sync(f.write, b"".join(pending))
+                    pending = []
+        except (InternalServerException, TimeoutError):  # client gone, or silent for `timeout` seconds
+            dropped = True
+        if pending:
+            written += await anyio.to_thread.run_sync(f.write, b"".join(pending))
+        mismatch = digest is not None and not dropped and digest.digest() != checksum[1]
+        if mismatch or (digest is not None and dropped):
             f.truncate(offset)
             written = 0
         f.flush()

@@ -2,7 +2,11 @@
 
 from __future__ import annotations
 
+import base64
+import binascii
+import hashlib
 import json
+import os
 from pathlib import Path
 
 import msgspec
@@ -13,13 +17,13 @@ from gateway.storage import audit
 from gateway.storage.blobs import MediaStore, sha256_of
 from gateway.storage.database import Database
 from processing.capture.media import check_photo, check_video, sniff
-from processing.capture.quality import gate_file
+from processing.capture.quality import gate_bytes
 from processing.capture.readiness import View
 from processing.capture.readiness import assess as assess_readiness
 from schemas.base import iso, utcnow
 from schemas.capture import Asset, AssetKind, CaptureMetadata, CaptureReadiness, MediaType, QualityVerdict
 from schemas.config import Config
-from schemas.errors import InvalidInput, NotFound
+from schemas.errors import ChecksumMismatch, InvalidInput, NotFound, PayloadTooLarge
 from schemas.ids import uuid7
 from schemas.records import RecordKind
 
@@ -41,39 +45,57 @@ class AssetService:
     def __init__(self, db: Database, config: Config, store: MediaStore):
         self.db, self.config, self.store = db, config, store
 
-    def store_upload(self, principal: Principal, encounter_id: str, part: Path, filename: str) -> Asset:
-        """Check a finished upload and keep it; the same bytes for the same encounter give the same asset."""
+    def store_upload(self, principal: Principal, encounter_id: str, part: Path, filename: str, *,
+                     upload_id: str | None = None, expected: str | None = None) -> Asset:  # fmt: skip
+        """Check a finished upload and keep it; the same bytes for the same encounter give the same asset.
+
+        Everything is checked before the file moves into the store; the asset row and the
+        upload's completion are written in one transaction. `expected` is an optional
+        whole-file checksum from the upload's metadata ("sha256 <hex or base64>").
+        """
         size = part.stat().st_size
         if size == 0:
             raise InvalidInput("the file is empty")
         with open(part, "rb") as f:
             media_type = sniff(f.read(32))
+        with self.db.read() as conn:
+            require_live_encounter(conn, encounter_id)
         if media_type.is_video:
-            metadata, kind = check_video(part), AssetKind.video
+            limits = self.config
+            metadata = check_video(part, limits=limits.quality, max_seconds=limits.uploads.max_video_seconds)
+            kind, verdict = AssetKind.video, None
+            sha = sha256_of(part)
         else:
-            metadata, kind = check_photo(part, media_type, self.config.quality.max_pixels), AssetKind.photo
-        sha = sha256_of(part)
-        existing = self._find(encounter_id, sha)
-        if existing is not None:
-            part.unlink()
-            return existing
+            if size > self.config.uploads.max_photo_bytes:
+                raise PayloadTooLarge(f"a {size // 1024**2} MB photo is over the {self.config.uploads.max_photo_bytes // 1024**2} MB"
+                                      " limit: phones write 2-30 MB; send the camera's original, not a scan")  # fmt: skip
+            data = part.read_bytes()
+            metadata, kind = check_photo(data, media_type, self.config.quality.max_pixels), AssetKind.photo
+            verdict = gate_bytes(data, self.config.quality, name=filename)
+            sha = hashlib.sha256(data).hexdigest()
+        _check_whole_file(expected, sha)
+        new_blob = not self.store.blob(sha).exists()
         final = self.store.promote(part, sha)
-        verdict = None if media_type.is_video else gate_file(final, self.config.quality)
-        if verdict is not None:
-            verdict = msgspec.structs.replace(verdict, file=filename)
-        return self._insert(principal, encounter_id, kind, media_type, sha, size, filename, metadata, verdict, None)
+        try:
+            return self._insert(principal, encounter_id, kind, media_type, sha, size, filename, metadata, verdict, None,
+                                upload_id=upload_id)  # fmt: skip
+        except BaseException:
+            if new_blob:
+                os.replace(final, part)  # back where it was: the upload can still be completed later
+            raise
 
     def _insert(self, principal: Principal, encounter_id: str, kind: AssetKind, media_type: MediaType, sha: str,
                 size: int, filename: str, metadata: CaptureMetadata, verdict: QualityVerdict | None,
-                source_asset_id: str | None) -> Asset:  # fmt: skip
+                source_asset_id: str | None, *, upload_id: str | None = None) -> Asset:  # fmt: skip
         asset_id = uuid7()
         with self.db.write() as conn:
             require_live_encounter(conn, encounter_id)
-            # Two uploads of the same bytes finishing together: the second finds the first's row.
+            # The same bytes already stored for this encounter (a retry, or two uploads finishing together).
             existing = conn.execute(
                 "SELECT * FROM assets WHERE encounter_id = ? AND sha256 = ?", (encounter_id, sha)
             ).fetchone()
             if existing is not None:
+                _mark_upload_complete(conn, upload_id, existing["id"])
                 return _asset(existing)
             conn.execute(
                 "INSERT INTO assets (id, encounter_id, kind, media_type, sha256, size_bytes, filename, metadata, verdict,"
@@ -82,6 +104,7 @@ class AssetService:
                  msgspec.json.encode(metadata).decode(), msgspec.json.encode(verdict).decode() if verdict else None,
                  source_asset_id, iso(utcnow()), principal.username, principal.device_id),
             )  # fmt: skip
+            _mark_upload_complete(conn, upload_id, asset_id)
             audit.append(conn, action="asset.create", user_id=principal.user_id, device_id=principal.device_id,
                          kind="asset", record_id=asset_id, detail=json.dumps({"sha256": sha, "encounter": encounter_id}))  # fmt: skip
             return _asset(conn.execute("SELECT * FROM assets WHERE id = ?", (asset_id,)).fetchone())
@@ -134,3 +157,25 @@ class AssetService:
     def file(self, principal: Principal, asset_id: str) -> tuple[Asset, Path]:
         asset = self.get(principal, asset_id)
         return asset, self.store.blob(asset.sha256)
+
+
+def _mark_upload_complete(conn, upload_id: str | None, asset_id: str) -> None:
+    if upload_id is not None:
+        conn.execute("UPDATE uploads SET state = 'complete', asset_id = ?, error = NULL WHERE id = ? AND state = 'open'",
+                     (asset_id, upload_id))  # fmt: skip
+
+
+def _check_whole_file(expected: str | None, sha256_hex: str) -> None:
+    """Compare with the whole-file checksum the phone sent in Upload-Metadata, if it sent one."""
+    if not expected:
+        return
+    algo, _, value = expected.strip().partition(" ")
+    if algo.lower() != "sha256":
+        raise InvalidInput(f"whole-file checksum {algo!r} is not supported: send 'sha256 <hex or base64>'")
+    digest = bytes.fromhex(sha256_hex)
+    try:
+        given = bytes.fromhex(value) if len(value) == 64 else base64.b64decode(value, validate=True)
+    except (ValueError, binascii.Error) as exc:
+        raise InvalidInput("the whole-file checksum is neither hex nor base64") from exc
+    if given != digest:
+        raise ChecksumMismatch("the file received does not match the checksum the phone sent for it: upload it again")

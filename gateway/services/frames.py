@@ -2,24 +2,33 @@
 
 A video asset is done once its frames are stored (frames_done_at). Pending videos are
 picked up after each video upload and by the scheduler, so a gateway restarted in the
-middle of an extraction finishes it later; the frames of one video are stored together.
+middle of an extraction finishes it later. The frames of one video are stored together:
+their JPEG files first, then their asset rows and the video's frames_done_at in one
+transaction, so a crash leaves either all of them or none (and at most unreferenced files).
+One video failing does not stop the others; a video the extractor fails on is tried at
+most twice, then marked done with frames_error.
 """
 
 from __future__ import annotations
 
+import json
 import logging
+import sqlite3
 
 import msgspec
 
 from gateway.services.assets import AssetService
 from gateway.services.permissions import Principal
+from gateway.services.validation import require_live_encounter
+from gateway.storage import audit
 from gateway.storage.database import Database
-from processing.capture.frames import extract
+from processing.capture.frames import ExtractedFrame, extract
 from schemas.accounts import Role
 from schemas.base import iso, utcnow
 from schemas.capture import Asset, AssetKind, CaptureMetadata, MediaType
 from schemas.config import Config
-from schemas.errors import BurnedgeError
+from schemas.errors import BurnedgeError, InvalidInput, NotFound
+from schemas.ids import uuid7
 
 log = logging.getLogger("burnedge.frames")
 GATEWAY = Principal(user_id="gateway", username="gateway", role=Role.clinician, device_id=None, session_hash="")
@@ -31,6 +40,7 @@ class FrameService:
         self.db, self.config, self.assets = db, config, assets
 
     def pending(self) -> list[str]:
+        """Ids of the videos whose frames are not stored yet, oldest first."""
         rows = (
             self.db.connection()
             .execute("SELECT id FROM assets WHERE kind = 'video' AND frames_done_at IS NULL ORDER BY created_at")
@@ -39,13 +49,29 @@ class FrameService:
         return [r["id"] for r in rows]
 
     def extract_pending(self) -> int:
+        """Extract and store the frames of every pending video; returns how many were processed.
+
+        A video that cannot be stored (disk full, database busy) is logged and left pending for
+        the next run; the videos after it are still processed.
+        """
         done = 0
-        for asset_id in self.pending():
-            self.extract_one(asset_id)
+        for video_id in self.pending():
+            try:
+                self.extract_one(video_id)
+            except Exception:
+                log.exception("frames of video %s not stored, to be retried", video_id)
+                continue
             done += 1
         return done
 
     def extract_one(self, video_id: str) -> list[Asset]:
+        """Extract a video's frames and store them; returns the frame assets ([] if another run stored them).
+
+        A video that does not decode is marked done with frames_error at once. Any other failure
+        of the extractor (a bug it hits on these bytes) is recorded in frames_error and the video
+        tried once more at the next run, in case the failure was the gateway stopping; a second
+        failure marks it done.
+        """
         video = self.assets.get(GATEWAY, video_id)
         path = self.assets.store.blob(video.sha256)
         try:
@@ -54,23 +80,76 @@ class FrameService:
             log.warning("no frames from video %s: %s", video_id, exc.detail)
             self._mark(video_id, error=exc.detail)
             return []
-        frames = []
-        for frame in result.frames:
-            sha, _ = self.assets.store.put(frame.jpeg)
-            verdict = msgspec.structs.replace(frame.verdict, file=f"{video.filename}@{frame.time_s:.3f}s.jpg")
-            metadata = CaptureMetadata(captured_at=video.metadata.captured_at, width=frame.verdict.figures.width,
-                                       height=frame.verdict.figures.height)  # fmt: skip
-            frames.append(self.assets.add_derived(
-                GATEWAY, video, AssetKind.frame, MediaType.jpeg, sha, len(frame.jpeg),
-                f"{video.filename}@{frame.time_s:.3f}s.jpg", metadata, verdict,
-            ))  # fmt: skip
-        self._mark(video_id)
-        log.info(
-            "video %s: %d frames kept of %d decoded in %.2f s", video_id, len(frames), result.decoded, result.seconds
-        )
-        return frames
+        except Exception as exc:
+            log.exception("frame extraction failed on video %s", video_id)
+            self._failed(video_id, f"frame extraction failed ({type(exc).__name__}: {exc})"[:500])
+            return []
+        # The files first: a committed row never names a missing file.
+        stored = [(self.assets.store.put(frame.jpeg)[0], frame) for frame in result.frames]
+        ids = self._store(video, stored)
+        if ids is None:
+            log.info("video %s: frames already stored by another run", video_id)
+            return []
+        log.info("video %s: %d frames kept of %d decoded in %.2f s", video_id, len(ids), result.decoded, result.seconds)
+        return [self.assets.get(GATEWAY, i) for i in ids]
+
+    def _store(self, video: Asset, frames: list[tuple[str, ExtractedFrame]]) -> list[str] | None:
+        """All frame rows, their audit entries and the video's frames_done_at, in one transaction.
+
+        None if the video was done meanwhile. Frames whose bytes the encounter already has keep that asset.
+        """
+        with self.db.write() as conn:
+            row = conn.execute("SELECT frames_done_at FROM assets WHERE id = ?", (video.id,)).fetchone()
+            if row is None or row["frames_done_at"] is not None:
+                return None
+            try:
+                require_live_encounter(conn, video.encounter_id)
+            except (InvalidInput, NotFound) as exc:
+                _set_done(conn, video.id, exc.detail)
+                return []
+            ids = [_insert_frame(conn, video, sha, frame) for sha, frame in frames]
+            _set_done(conn, video.id, None)
+        return list(dict.fromkeys(ids))
 
     def _mark(self, video_id: str, error: str | None = None) -> None:
         with self.db.write() as conn:
-            conn.execute("UPDATE assets SET frames_done_at = ?, frames_error = ? WHERE id = ?",
-                         (iso(utcnow()), error, video_id))  # fmt: skip
+            _set_done(conn, video_id, error)
+
+    def _failed(self, video_id: str, error: str) -> None:
+        with self.db.write() as conn:
+            row = conn.execute("SELECT frames_error, frames_done_at FROM assets WHERE id = ?", (video_id,)).fetchone()
+            if row is None or row["frames_done_at"] is not None:
+                return
+            if row["frames_error"] is None:
+                conn.execute("UPDATE assets SET frames_error = ? WHERE id = ?", (error, video_id))
+            else:
+                _set_done(conn, video_id, error)
+
+
+def _set_done(conn: sqlite3.Connection, video_id: str, error: str | None) -> None:
+    conn.execute("UPDATE assets SET frames_done_at = ?, frames_error = ? WHERE id = ? AND frames_done_at IS NULL",
+                 (iso(utcnow()), error, video_id))  # fmt: skip
+
+
+def _insert_frame(conn: sqlite3.Connection, video: Asset, sha: str, frame: ExtractedFrame) -> str:
+    """One frame's asset row (the columns of AssetService._insert) and its audit entry; returns its id."""
+    existing = conn.execute(
+        "SELECT id FROM assets WHERE encounter_id = ? AND sha256 = ?", (video.encounter_id, sha)
+    ).fetchone()
+    if existing is not None:
+        return existing["id"]
+    name = f"{video.filename}@{frame.time_s:.3f}s.jpg"
+    verdict = msgspec.structs.replace(frame.verdict, file=name)
+    metadata = CaptureMetadata(captured_at=video.metadata.captured_at, width=frame.verdict.figures.width,
+                               height=frame.verdict.figures.height)  # fmt: skip
+    asset_id = uuid7()
+    conn.execute(
+        "INSERT INTO assets (id, encounter_id, kind, media_type, sha256, size_bytes, filename, metadata, verdict,"
+        " source_asset_id, created_at, created_by, device_id) VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?)",
+        (asset_id, video.encounter_id, AssetKind.frame.value, MediaType.jpeg.value, sha, len(frame.jpeg), name,
+         msgspec.json.encode(metadata).decode(), msgspec.json.encode(verdict).decode(), video.id, iso(utcnow()),
+         GATEWAY.username, GATEWAY.device_id),
+    )  # fmt: skip
+    audit.append(conn, action="asset.create", user_id=GATEWAY.user_id, device_id=GATEWAY.device_id, kind="asset",
+                 record_id=asset_id, detail=json.dumps({"sha256": sha, "encounter": video.encounter_id}))  # fmt: skip
+    return asset_id

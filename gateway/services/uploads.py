@@ -1,11 +1,12 @@
 """Resumable uploads (tus 1.0) of photos and videos, and what happens when one completes.
 
-Bytes stream to a .part file; its size is the upload's offset, so an upload survives the
-gateway being killed and resumes where the bytes stop. On completion the file is hashed,
-its type is read from its bytes, it is checked whole, moved into the content-addressed
-store and recorded as an asset with its capture metadata and, for photos, the quality
-verdict. A file that fails any check is deleted and the upload marked failed: nothing is
-left half-stored.
+Bytes stream to a .part file whose size is the upload's offset, so an upload survives the
+gateway being killed and resumes where the bytes stop. One claim per upload covers a PATCH
+from its first byte to the end of completion; termination, expiry and recovery take the
+same claim, so none of them can pull a file from under another. Completion records the
+asset and marks the upload complete in one transaction. An upload whose bytes all arrived
+but that was never recorded (the gateway died during completion) is completed on the next
+HEAD or by the periodic housekeeping, so a phone that saw "all bytes received" is never wrong.
 """
 
 from __future__ import annotations
@@ -14,6 +15,8 @@ import datetime as dt
 import json
 import shutil
 import threading
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -22,11 +25,26 @@ from gateway.services.permissions import Principal, require_capture
 from gateway.services.validation import require_live_encounter
 from gateway.storage.blobs import MediaStore
 from gateway.storage.database import Database
+from schemas.accounts import Role
 from schemas.base import iso, utcnow
-from schemas.capture import Asset
+from schemas.capture import Asset, UploadPhase
 from schemas.config import Config
-from schemas.errors import BurnedgeError, Conflict, Gone, InsufficientStorage, InvalidInput, NotFound, PayloadTooLarge
+from schemas.errors import (
+    BurnedgeError,
+    Conflict,
+    Forbidden,
+    Gone,
+    InsufficientStorage,
+    InvalidInput,
+    NotFound,
+    PayloadTooLarge,
+    StorageError,
+    TooManyAttempts,
+)
 from schemas.ids import uuid7
+
+FILENAME_KEYS = ("filename", "name", "fileName")
+"""Metadata keys mobile tus clients use for the file name (tus-js, TUSKit, ...)."""
 
 
 @dataclass(frozen=True)
@@ -37,7 +55,7 @@ class UploadState:
     offset: int
     metadata: dict[str, str]
     expires_at: dt.datetime
-    state: str
+    phase: UploadPhase
     asset_id: str | None
 
 
@@ -55,108 +73,154 @@ def check_filename(name: str) -> str:
 class UploadService:
     def __init__(self, db: Database, config: Config, store: MediaStore, assets: AssetService):
         self.db, self.config, self.store, self.assets = db, config, store, assets
-        self._busy: set[str] = set()
-        self._busy_lock = threading.Lock()
+        self._claimed: set[str] = set()
+        self._lock = threading.Lock()
 
+    @contextmanager
+    def claim(self, upload_id: str) -> Iterator[None]:
+        """Exclusive use of one upload (a PATCH and its completion, a termination, ...)."""
+        with self._lock:
+            if upload_id in self._claimed:
+                raise Conflict("this upload is busy (receiving bytes or being checked): ask for its offset and retry")
+            self._claimed.add(upload_id)
+        try:
+            yield
+        finally:
+            with self._lock:
+                self._claimed.discard(upload_id)
+
+    # creation and status --------------------------------------------------------------
     def create(self, principal: Principal, length: int, metadata: dict[str, str]) -> UploadState:
         require_capture(principal)
+        limits = self.config.uploads
         if length <= 0:
             raise InvalidInput("the file is empty (Upload-Length 0): take the picture again")
-        if length > self.config.uploads.max_upload_bytes:
-            raise PayloadTooLarge(f"{length:,} bytes is over the {self.config.uploads.max_upload_bytes:,}-byte limit")
-        free = shutil.disk_usage(self.store.root).free
-        if free - self._outstanding_bytes() - length < self.config.uploads.min_free_bytes:
-            raise InsufficientStorage(
-                f"the gateway has {free // 1024**2:,} MB free, not enough for this {length // 1024**2:,} MB file:"
-                " ask the clinic's IT to free space (older analyses can be archived)"
-            )
+        if length > limits.max_upload_bytes:
+            raise PayloadTooLarge(f"{length:,} bytes is over the {limits.max_upload_bytes:,}-byte limit")
         encounter_id = metadata.get("encounter_id")
         if not encounter_id:
             raise InvalidInput("say which encounter the file belongs to: Upload-Metadata encounter_id")
-        filename = check_filename(metadata.get("filename") or metadata.get("name") or "")
+        filename = check_filename(next((metadata[k] for k in FILENAME_KEYS if metadata.get(k)), ""))
         upload_id, now = uuid7(), utcnow()
-        expires = now + dt.timedelta(seconds=self.config.uploads.expiry_s)
         with self.db.write() as conn:
             require_live_encounter(conn, encounter_id)
+            open_rows = conn.execute("SELECT id, length, created_by FROM uploads WHERE state = 'open'").fetchall()
+            if sum(r["created_by"] == principal.user_id for r in open_rows) >= limits.max_open_per_user:
+                raise TooManyAttempts(f"you have {limits.max_open_per_user} unfinished uploads: finish or cancel some first",
+                                      retry_after_s=60)  # fmt: skip
+            self._check_disk(open_rows, length)
             conn.execute(
                 "INSERT INTO uploads (id, encounter_id, length, metadata, filename, state, created_by, device_id,"
                 " created_at, expires_at) VALUES (?,?,?,?,?,?,?,?,?,?)",
-                (upload_id, encounter_id, length, json.dumps(metadata), filename, "open", principal.user_id,
-                 principal.device_id, iso(now), iso(expires)),
+                (upload_id, encounter_id, length, json.dumps(metadata), filename, UploadPhase.open.value,
+                 principal.user_id, principal.device_id, iso(now), iso(now + dt.timedelta(seconds=limits.expiry_s))),
             )  # fmt: skip
             self.store.create_part(upload_id)
         return self._state(self._row(upload_id))
 
-    def status(self, principal: Principal, upload_id: str) -> UploadState:
-        require_capture(principal)
-        return self._state(self._live_row(upload_id, allow_complete=True))
+    def _check_disk(self, open_rows, length: int) -> None:
+        """What open uploads will still write counts as used: abandoned ones hold it until they expire."""
+        outstanding = sum(r["length"] - self._held(r["id"]) for r in open_rows)
+        free = shutil.disk_usage(self.store.root).free
+        if free - outstanding - length < self.config.uploads.min_free_bytes:
+            raise InsufficientStorage(
+                f"the gateway has {free // 1024**2:,} MB free, not enough for this {length // 1024**2:,} MB file:"
+                " ask the clinic's IT to free space (older analyses can be archived)"
+            )
 
-    def begin_append(self, principal: Principal, upload_id: str, offset: int) -> tuple[Path, UploadState]:
-        """Claim the upload for one PATCH; the caller must call end_append."""
+    def status(self, principal: Principal, upload_id: str) -> UploadState:
+        """For HEAD and GET; a full upload that was never recorded is completed first."""
         require_capture(principal)
-        row = self._live_row(upload_id, allow_complete=False)
-        with self._busy_lock:
-            if upload_id in self._busy:
-                raise Conflict("another request is sending this upload right now: wait for it, then ask for the offset")
-            self._busy.add(upload_id)
-        state = self._state(row)
+        row = self._owned_row(principal, upload_id)
+        if row["state"] == UploadPhase.complete.value:
+            return self._state(row)
+        row = self._live_row(upload_id)
+        if self._held(upload_id) == row["length"]:
+            try:
+                self.recover_one(upload_id)
+            except Conflict:
+                pass  # its own PATCH is completing it right now
+            row = self._row(upload_id)
+        return self._state(row)
+
+    # appending and completing (the caller holds the claim) ---------------------------------
+    def open_for_append(self, principal: Principal, upload_id: str, offset: int) -> tuple[Path, UploadState]:
+        require_capture(principal)
+        self._owned_row(principal, upload_id)
+        state = self._state(self._live_row(upload_id))
         if offset != state.offset:
-            self.end_append(upload_id)
             raise Conflict(
                 f"Upload-Offset {offset} does not match the {state.offset} bytes the gateway holds: resume from there"
             )
         return self.store.part(upload_id), state
 
-    def end_append(self, upload_id: str) -> None:
-        with self._busy_lock:
-            self._busy.discard(upload_id)
-
     def complete(self, principal: Principal, upload_id: str) -> Asset:
-        """All bytes are in: check the file and store it as an asset, or delete it and say why."""
+        """All bytes are in: check the file and record it, or delete it and say why."""
         row = self._row(upload_id)
         part = self.store.part(upload_id)
         try:
-            asset = self.assets.store_upload(principal, row["encounter_id"], part, row["filename"])
+            return self.assets.store_upload(principal, row["encounter_id"], part, row["filename"], upload_id=upload_id,
+                                            expected=json.loads(row["metadata"]).get("checksum"))  # fmt: skip
+        except StorageError:
+            raise  # the database was busy: the file stays, and housekeeping completes it later
         except BurnedgeError as exc:
             part.unlink(missing_ok=True)
-            self._set_state(upload_id, "failed", error=exc.detail)
+            self._finish(upload_id, UploadPhase.failed, error=exc.detail)
             raise
-        self._set_state(upload_id, "complete", asset_id=asset.id)
-        return asset
 
+    # ending uploads --------------------------------------------------------------------------
     def terminate(self, principal: Principal, upload_id: str) -> None:
         require_capture(principal)
-        row = self._live_row(upload_id, allow_complete=False)
-        with self._busy_lock:
-            if upload_id in self._busy:
-                raise Conflict("this upload is receiving bytes right now: terminate it after that request ends")
-        self.store.part(row["id"]).unlink(missing_ok=True)
-        self._set_state(upload_id, "terminated")
+        self._owned_row(principal, upload_id)
+        with self.claim(upload_id):
+            self._live_row(upload_id)
+            self.store.part(upload_id).unlink(missing_ok=True)
+            self._finish(upload_id, UploadPhase.terminated)
 
-    def expire(self) -> int:
-        """Drop unfinished uploads past their expiry (run periodically)."""
+    def housekeeping(self) -> tuple[int, int]:
+        """Complete full uploads left unrecorded by a crash; drop expired unfinished ones. (completed, dropped)"""
+        completed = dropped = 0
         now = iso(utcnow())
         rows = (
-            self.db.connection()
-            .execute("SELECT id FROM uploads WHERE state = 'open' AND expires_at < ?", (now,))
-            .fetchall()
+            self.db.connection().execute("SELECT id, length, expires_at FROM uploads WHERE state = 'open'").fetchall()
         )
-        dropped = 0
         for row in rows:
-            with self._busy_lock:
-                if row["id"] in self._busy:
-                    continue  # still receiving: its PATCH finishes first
-            self.store.part(row["id"]).unlink(missing_ok=True)
-            self._set_state(row["id"], "expired")
-            dropped += 1
-        return dropped
+            try:
+                if self._held(row["id"]) == row["length"]:
+                    completed += self.recover_one(row["id"]) is not None
+                elif row["expires_at"] < now:
+                    with self.claim(row["id"]):
+                        self.store.part(row["id"]).unlink(missing_ok=True)
+                        dropped += self._finish(row["id"], UploadPhase.expired)
+            except Conflict:
+                continue  # busy right now: its own request finishes it
+        return completed, dropped
 
-    # ------------------------------------------------------------------------------------
-    def _outstanding_bytes(self) -> int:
-        """What open uploads will still write: their declared lengths minus what they hold."""
-        rows = self.db.connection().execute("SELECT id, length FROM uploads WHERE state = 'open'").fetchall()
-        held = {r["id"]: self.store.part(r["id"]) for r in rows}
-        return sum(r["length"] - (held[r["id"]].stat().st_size if held[r["id"]].exists() else 0) for r in rows)
+    def recover_one(self, upload_id: str) -> Asset | None:
+        """Complete an upload whose bytes all arrived, as the person who sent them."""
+        row = self._row(upload_id)
+        user = (
+            self.db.connection()
+            .execute("SELECT username, role FROM users WHERE id = ?", (row["created_by"],))
+            .fetchone()
+        )
+        if user is None:
+            return None
+        sender = Principal(row["created_by"], user["username"], Role(user["role"]), row["device_id"], "")
+        with self.claim(upload_id):
+            if self._row(upload_id)["state"] != UploadPhase.open.value:
+                return None
+            try:
+                return self.complete(sender, upload_id)
+            except StorageError:
+                return None
+            except BurnedgeError:
+                return None  # recorded as failed, with its reason, by complete()
+
+    # rows ------------------------------------------------------------------------------------
+    def _held(self, upload_id: str) -> int:
+        part = self.store.part(upload_id)
+        return part.stat().st_size if part.exists() else 0
 
     def _row(self, upload_id: str):
         row = self.db.connection().execute("SELECT * FROM uploads WHERE id = ?", (upload_id,)).fetchone()
@@ -164,26 +228,33 @@ class UploadService:
             raise NotFound(f"no upload {upload_id}")
         return row
 
-    def _live_row(self, upload_id: str, *, allow_complete: bool):
+    def _owned_row(self, principal: Principal, upload_id: str):
+        """Uploads belong to who started them, or to the phone they were started from (shared clinic phones)."""
         row = self._row(upload_id)
-        if row["state"] == "complete" and allow_complete:
-            return row
-        if row["state"] != "open":
-            raise Gone(
-                f"this upload is {row['state']}" + (f": {row['error']}" if row["error"] else "") + "; start a new one"
-            )
+        same_device = principal.device_id is not None and principal.device_id == row["device_id"]
+        if row["created_by"] != principal.user_id and not same_device:
+            raise Forbidden("this upload was started by someone else on another phone")
+        return row
+
+    def _live_row(self, upload_id: str):
+        row = self._row(upload_id)
+        if row["state"] != UploadPhase.open.value:
+            reason = f": {row['error']}" if row["error"] else ""
+            raise Gone(f"this upload is {row['state']}{reason}; start a new one")
         if dt.datetime.fromisoformat(row["expires_at"]) < utcnow():
             raise Gone("this upload expired before it was finished: start a new one")
         return row
 
     def _state(self, row) -> UploadState:
-        part = self.store.part(row["id"])
-        offset = row["length"] if row["state"] == "complete" else (part.stat().st_size if part.exists() else 0)
+        phase = UploadPhase(row["state"])
+        offset = row["length"] if phase is UploadPhase.complete else self._held(row["id"])
         return UploadState(id=row["id"], encounter_id=row["encounter_id"], length=row["length"], offset=offset,
                            metadata=json.loads(row["metadata"]), expires_at=dt.datetime.fromisoformat(row["expires_at"]),
-                           state=row["state"], asset_id=row["asset_id"])  # fmt: skip
+                           phase=phase, asset_id=row["asset_id"])  # fmt: skip
 
-    def _set_state(self, upload_id: str, state: str, *, asset_id: str | None = None, error: str | None = None) -> None:
+    def _finish(self, upload_id: str, phase: UploadPhase, *, error: str | None = None) -> bool:
+        """Move an open upload to its end state; False if it had already ended another way."""
         with self.db.write() as conn:
-            conn.execute("UPDATE uploads SET state = ?, asset_id = COALESCE(?, asset_id), error = ? WHERE id = ?",
-                         (state, asset_id, error, upload_id))  # fmt: skip
+            cur = conn.execute("UPDATE uploads SET state = ?, error = ? WHERE id = ? AND state = 'open'",
+                               (phase.value, error, upload_id))  # fmt: skip
+            return cur.rowcount == 1

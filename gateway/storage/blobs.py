@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import uuid
 from pathlib import Path
 
 CHUNK = 1024 * 1024
@@ -47,17 +48,26 @@ class MediaStore:
         return final
 
     def put(self, data: bytes) -> tuple[str, Path]:
-        """Store bytes made by the gateway itself (video frames); returns their SHA-256 and path."""
+        """Store bytes made by the gateway itself (video frames); returns their SHA-256 and path.
+
+        Written under a temporary name of its own, then renamed: two writers of the same bytes
+        never share a file, and the last rename leaves the same content in place.
+        """
         sha = hashlib.sha256(data).hexdigest()
         final = self.blob(sha)
         if not final.exists():
             final.parent.mkdir(exist_ok=True)
-            tmp = final.with_name(final.name + ".tmp")
-            with open(tmp, "wb") as f:
-                f.write(data)
-                f.flush()
-                os.fsync(f.fileno())
-            os.replace(tmp, final)
+            tmp = final.with_name(f"{sha}.{uuid.uuid4().hex}.tmp")
+            try:
+                with open(tmp, "xb") as f:
+                    f.write(data)
+                    f.flush()
+                    os.fsync(f.fileno())
+                os.replace(tmp, final)
+            except BaseException:
+                tmp.unlink(missing_ok=True)
+                raise
+            _fsync_dir(final.parent)
         return sha, final
 
 

@@ -1,7 +1,8 @@
 """A video becomes a multi-view set: the sharpest frame of each slice of the clip, minus near-duplicates.
 
-One decoding pass over the reference frames (B-frames are skipped). Each frame's sharpness is measured on a strided view of its luma plane
-(no copy, no colour conversion), and only the best frame of each slice is kept in memory.
+One decoding pass over the reference frames (B-frames are skipped). Each frame's sharpness
+is measured on a strided view of its luma plane (no copy, no colour conversion; 10-bit HDR
+video is shifted down to 8 bits), and only the best frame of each slice is kept in memory.
 As soon as the decoder has passed a slice, its pick is compared with the last kept frame
 (too little camera motion: dropped as a near-duplicate), and a worker thread turns it
 upright (phone rotation tag), encodes it as JPEG and gates it while decoding goes on: the
@@ -51,26 +52,39 @@ class Extraction:
 
 
 def luma(frame: av.VideoFrame, step: int) -> np.ndarray:
-    """A strided view of the frame's Y plane: no copy, no conversion."""
-    plane = frame.planes[0]
-    y = np.frombuffer(plane, np.uint8).reshape(plane.height, plane.line_size)[:, : plane.width]
-    return y[::step, ::step]
+    """Every `step`-th pixel of the frame's Y plane, as 8-bit grey.
+
+    8-bit video: a strided view of the plane (no copy, no conversion). 10- or 12-bit video
+    (iPhone HDR HEVC): its samples are 16-bit words, so the subsampled view is shifted down
+    to 8 bits (a copy, of the subsampled size only).
+    """
+    plane, fmt = frame.planes[0], frame.format
+    bits = fmt.components[0].bits
+    if bits <= 8:
+        y = np.frombuffer(plane, np.uint8).reshape(plane.height, plane.line_size)[:, : plane.width]
+        return y[::step, ::step]
+    words = np.frombuffer(plane, ">u2" if fmt.is_big_endian else "<u2")
+    y = words.reshape(plane.height, plane.line_size // 2)[:, : plane.width][::step, ::step]
+    # P010-style formats keep the sample in the high bits of each word, yuv420p10le in the low ones.
+    msb_aligned = fmt.name[:1] == "p" and fmt.name[1:4].isdigit()
+    return (y >> (16 - 8 if msb_aligned else bits - 8)).astype(np.uint8)
 
 
 def extract(path: str | Path, config: FramesConfig, gate: QualityGateConfig, *, name: str = "video") -> Extraction:
+    """The video's multi-view set: upright JPEG frames, each gated like a photo (InvalidInput if it does not decode)."""
     start = time.perf_counter()
     out = Extraction(frames=[], decoded=0)
     with ThreadPoolExecutor(max_workers=1) as worker:
         rendered = []
         last_kept: list[np.ndarray] = []
 
-        def finish(pick: _Pick, rotation: int) -> None:
+        def finish(pick: _Pick) -> None:
             small = luma(pick.frame, 8).astype(np.float32)
             if last_kept and not _moved(last_kept[0], small, config):
                 out.skipped_duplicates.append(round(pick.time_s, 3))
                 return
             last_kept[:] = [small]
-            rendered.append(worker.submit(_render, pick, rotation, config, gate, name))
+            rendered.append(worker.submit(_render, pick, config, gate, name))
 
         out.decoded = _pick_sharpest(Path(path), config, finish)
         out.frames = [f.result() for f in rendered]
@@ -91,21 +105,20 @@ def _pick_sharpest(path: Path, config: FramesConfig, finish) -> int:
             # left carry more bits (a lower quantiser) than B-frames, which suits 3D reconstruction.
             stream.codec_context.skip_frame = "BIDIR"
             duration = _duration(container, stream)
-            current, best, decoded, rotation = 0, None, 0, 0
+            current, best, decoded = 0, None, 0
             for frame in container.decode(stream):
                 decoded += 1
                 t = float(frame.time or 0.0)
-                rotation = int(getattr(frame, "rotation", 0) or 0)
                 k = min(slices - 1, int(t / duration * slices)) if duration > 0 else 0
                 if k != current and best is not None:
-                    finish(best, rotation)
+                    finish(best)
                     best = None
                 current = k
                 sharp = float(cv2.Laplacian(luma(frame, config.sharpness_step), cv2.CV_32F).var())
                 if best is None or sharp > best.sharpness:
                     best = _Pick(t, sharp, frame)
             if best is not None:
-                finish(best, rotation)
+                finish(best)
     except av.FFmpegError as exc:
         raise InvalidInput(f"the video could not be decoded: {exc}") from exc
     if decoded == 0:
@@ -113,8 +126,8 @@ def _pick_sharpest(path: Path, config: FramesConfig, finish) -> int:
     return decoded
 
 
-def _render(pick: _Pick, rotation: int, config: FramesConfig, gate: QualityGateConfig, name: str) -> ExtractedFrame:
-    turns = (-rotation // 90) % 4  # the tag says how far to turn the picture to show it upright
+def _render(pick: _Pick, config: FramesConfig, gate: QualityGateConfig, name: str) -> ExtractedFrame:
+    turns = upright_turns(pick.frame)
     bgr = np.ascontiguousarray(np.rot90(pick.frame.to_ndarray(format="bgr24"), turns))
     ok, buf = cv2.imencode(".jpg", bgr, [cv2.IMWRITE_JPEG_QUALITY, config.jpeg_quality])
     if not ok:
@@ -123,6 +136,15 @@ def _render(pick: _Pick, rotation: int, config: FramesConfig, gate: QualityGateC
     verdict = gate_pixels(gray, gate, name=f"{name}@{pick.time_s:.3f}s")
     return ExtractedFrame(time_s=round(pick.time_s, 3), jpeg=buf.tobytes(), sharpness=round(pick.sharpness, 1),
                           verdict=verdict)  # fmt: skip
+
+
+def upright_turns(frame: av.VideoFrame) -> int:
+    """Quarter turns, counter-clockwise as np.rot90 counts them, that show the frame upright.
+
+    The display matrix's rotation is the counter-clockwise angle a player turns the picture by
+    (an iPhone held upright records landscape pictures tagged -90: a quarter turn clockwise).
+    """
+    return round((getattr(frame, "rotation", 0) or 0) / 90) % 4
 
 
 def _duration(container, stream) -> float:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import io
 from pathlib import Path
 
 import av
@@ -9,6 +10,7 @@ from PIL import ExifTags, Image, UnidentifiedImageError
 
 from processing.capture.images import read_header
 from schemas.capture import CaptureMetadata, MediaType
+from schemas.config import QualityGateConfig, UploadConfig
 from schemas.errors import InvalidInput, UnsupportedMedia
 
 HEIF_BRANDS = {b"heic", b"heix", b"hevc", b"hevx", b"heim", b"heis", b"hevm", b"hevs", b"mif1", b"msf1"}
@@ -39,14 +41,15 @@ def sniff(head: bytes) -> MediaType:
     )
 
 
-def check_photo(path: Path, media_type: MediaType, max_pixels: int) -> CaptureMetadata:
-    """Refuse truncated or corrupt photos; return their EXIF capture data."""
-    data = path.read_bytes()
+def check_photo(data: bytes, media_type: MediaType, max_pixels: int) -> CaptureMetadata:
+    """Refuse truncated or corrupt photos; return their EXIF capture data.
+
+    There is no end-of-image marker check: Samsung and Pixel phones append data after it
+    (SEF trailers, motion-photo videos). A reduced decode finds truncation instead.
+    """
     header = read_header(data, max_pixels)
-    if media_type is MediaType.jpeg and not data.rstrip(b"\x00").endswith(b"\xff\xd9"):
-        raise InvalidInput("the JPEG is truncated (no end-of-image marker): upload it again")
     try:
-        with Image.open(path) as im:
+        with Image.open(io.BytesIO(data)) as im:
             if media_type is MediaType.png:
                 im.verify()  # every chunk's CRC, without decoding
             else:
@@ -83,8 +86,19 @@ def _exif_metadata(exif, width: int, height: int, orientation: int) -> CaptureMe
     )
 
 
-def check_video(path: Path) -> CaptureMetadata:
-    """Refuse videos that do not open, are not H.264/HEVC, or whose end does not decode."""
+MAX_VIDEO_SIDE = 4096
+"""Videos with frames larger than this on a side are refused (phones record 4K at most, 3840x2160)."""
+
+
+def check_video(
+    path: Path, *, limits: QualityGateConfig | None = None, max_seconds: float | None = None
+) -> CaptureMetadata:
+    """Refuse videos that do not open, are not H.264/HEVC, or whose end does not decode; and videos
+    whose frames are smaller than a usable photo (limits.min_width by limits.min_height, either
+    way round), larger than MAX_VIDEO_SIDE on a side, or that last more than `max_seconds`.
+    The defaults are those of QualityGateConfig() and UploadConfig()."""
+    limits = limits or QualityGateConfig()
+    max_seconds = UploadConfig().max_video_seconds if max_seconds is None else max_seconds
     try:
         with av.open(str(path)) as container:
             if not container.streams.video:
@@ -94,9 +108,15 @@ def check_video(path: Path) -> CaptureMetadata:
             if codec not in VIDEO_CODECS:
                 raise InvalidInput(f"video codec {codec} is not supported: record in H.264 or HEVC (the phone default)")
             duration = float(stream.duration * stream.time_base) if stream.duration else (container.duration or 0) / 1e6
+            if duration > max_seconds:
+                raise InvalidInput(f"the video lasts {duration:.0f} s, longer than the {max_seconds} s allowed: "
+                                   "film one slow circle around the burn")  # fmt: skip
+            if stream.codec_context.width and stream.codec_context.height:  # from the header, before decoding
+                _check_frame_size(stream.codec_context.width, stream.codec_context.height, limits)
             first = next(container.decode(stream), None)
             if first is None or duration <= 0:
                 raise InvalidInput("the video has no decodable frames")
+            _check_frame_size(first.width, first.height, limits)
             _decode_near_end(container, stream, duration)
             meta = CaptureMetadata(
                 captured_at=container.metadata.get("creation_time"), width=first.width, height=first.height,
@@ -107,6 +127,15 @@ def check_video(path: Path) -> CaptureMetadata:
     except av.FFmpegError as exc:
         raise InvalidInput(f"the video is truncated or corrupt: {exc}") from exc
     return meta
+
+
+def _check_frame_size(width: int, height: int, limits: QualityGateConfig) -> None:
+    if max(width, height) > MAX_VIDEO_SIDE:
+        raise InvalidInput(f"the video is {width}x{height} pixels, more than {MAX_VIDEO_SIDE} on a side: "
+                           "record at 4K or less")  # fmt: skip
+    if max(width, height) < limits.min_width or min(width, height) < limits.min_height:
+        raise InvalidInput(f"the video is {width}x{height} pixels, smaller than a usable photo "
+                           f"({limits.min_width}x{limits.min_height}): record at 720p or more")  # fmt: skip
 
 
 def _decode_near_end(container, stream, duration: float) -> None:
