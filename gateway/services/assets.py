@@ -87,44 +87,12 @@ class AssetService:
     def _insert(self, principal: Principal, encounter_id: str, kind: AssetKind, media_type: MediaType, sha: str,
                 size: int, filename: str, metadata: CaptureMetadata, verdict: QualityVerdict | None,
                 source_asset_id: str | None, *, upload_id: str | None = None) -> Asset:  # fmt: skip
-        asset_id = uuid7()
         with self.db.write() as conn:
             require_live_encounter(conn, encounter_id)
-            # The same bytes already stored for this encounter (a retry, or two uploads finishing together).
-            existing = conn.execute(
-                "SELECT * FROM assets WHERE encounter_id = ? AND sha256 = ?", (encounter_id, sha)
-            ).fetchone()
-            if existing is not None:
-                _mark_upload_complete(conn, upload_id, existing["id"])
-                return _asset(existing)
-            conn.execute(
-                "INSERT INTO assets (id, encounter_id, kind, media_type, sha256, size_bytes, filename, metadata, verdict,"
-                " source_asset_id, created_at, created_by, device_id) VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?)",
-                (asset_id, encounter_id, kind.value, media_type.value, sha, size, filename,
-                 msgspec.json.encode(metadata).decode(), msgspec.json.encode(verdict).decode() if verdict else None,
-                 source_asset_id, iso(utcnow()), principal.username, principal.device_id),
-            )  # fmt: skip
+            asset_id = insert_asset_row(conn, principal, encounter_id, kind, media_type, sha, size, filename, metadata,
+                                        verdict, source_asset_id)  # fmt: skip
             _mark_upload_complete(conn, upload_id, asset_id)
-            audit.append(conn, action="asset.create", user_id=principal.user_id, device_id=principal.device_id,
-                         kind="asset", record_id=asset_id, detail=json.dumps({"sha256": sha, "encounter": encounter_id}))  # fmt: skip
             return _asset(conn.execute("SELECT * FROM assets WHERE id = ?", (asset_id,)).fetchone())
-
-    def add_derived(self, principal: Principal, source: Asset, kind: AssetKind, media_type: MediaType, sha: str,
-                    size: int, filename: str, metadata: CaptureMetadata, verdict: QualityVerdict | None) -> Asset:  # fmt: skip
-        """An asset the gateway made from another (a frame from its video); the same bytes once per encounter."""
-        existing = self._find(source.encounter_id, sha)
-        if existing is not None:
-            return existing
-        return self._insert(principal, source.encounter_id, kind, media_type, sha, size, filename, metadata, verdict,
-                            source.id)  # fmt: skip
-
-    def _find(self, encounter_id: str, sha: str) -> Asset | None:
-        row = (
-            self.db.connection()
-            .execute("SELECT * FROM assets WHERE encounter_id = ? AND sha256 = ?", (encounter_id, sha))
-            .fetchone()
-        )
-        return _asset(row) if row else None
 
     def get(self, principal: Principal, asset_id: str) -> Asset:
         require_read(principal, RecordKind.encounter)
@@ -179,3 +147,29 @@ def _check_whole_file(expected: str | None, sha256_hex: str) -> None:
         raise InvalidInput("the whole-file checksum is neither hex nor base64") from exc
     if given != digest:
         raise ChecksumMismatch("the file received does not match the checksum the phone sent for it: upload it again")
+
+
+def insert_asset_row(conn, principal: Principal, encounter_id: str, kind: AssetKind, media_type: MediaType, sha: str,
+                     size: int, filename: str, metadata: CaptureMetadata, verdict: QualityVerdict | None,
+                     source_asset_id: str | None) -> str:  # fmt: skip
+    """One asset row and its audit entry, inside the caller's transaction; returns its id.
+
+    The same bytes already stored for this encounter (a retry, two uploads finishing together,
+    a frame identical to a photo) keep their existing asset.
+    """
+    existing = conn.execute(
+        "SELECT id FROM assets WHERE encounter_id = ? AND sha256 = ?", (encounter_id, sha)
+    ).fetchone()
+    if existing is not None:
+        return existing["id"]
+    asset_id = uuid7()
+    conn.execute(
+        "INSERT INTO assets (id, encounter_id, kind, media_type, sha256, size_bytes, filename, metadata, verdict,"
+        " source_asset_id, created_at, created_by, device_id) VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?)",
+        (asset_id, encounter_id, kind.value, media_type.value, sha, size, filename,
+         msgspec.json.encode(metadata).decode(), msgspec.json.encode(verdict).decode() if verdict else None,
+         source_asset_id, iso(utcnow()), principal.username, principal.device_id),
+    )  # fmt: skip
+    audit.append(conn, action="asset.create", user_id=principal.user_id, device_id=principal.device_id, kind="asset",
+                 record_id=asset_id, detail=json.dumps({"sha256": sha, "encounter": encounter_id}))  # fmt: skip
+    return asset_id

@@ -11,16 +11,14 @@ most twice, then marked done with frames_error.
 
 from __future__ import annotations
 
-import json
 import logging
 import sqlite3
 
 import msgspec
 
-from gateway.services.assets import AssetService
+from gateway.services.assets import AssetService, insert_asset_row
 from gateway.services.permissions import Principal
 from gateway.services.validation import require_live_encounter
-from gateway.storage import audit
 from gateway.storage.database import Database
 from processing.capture.frames import ExtractedFrame, extract
 from schemas.accounts import Role
@@ -28,7 +26,6 @@ from schemas.base import iso, utcnow
 from schemas.capture import Asset, AssetKind, CaptureMetadata, MediaType
 from schemas.config import Config
 from schemas.errors import BurnedgeError, InvalidInput, NotFound
-from schemas.ids import uuid7
 
 log = logging.getLogger("burnedge.frames")
 GATEWAY = Principal(user_id="gateway", username="gateway", role=Role.clinician, device_id=None, session_hash="")
@@ -132,24 +129,10 @@ def _set_done(conn: sqlite3.Connection, video_id: str, error: str | None) -> Non
 
 
 def _insert_frame(conn: sqlite3.Connection, video: Asset, sha: str, frame: ExtractedFrame) -> str:
-    """One frame's asset row (the columns of AssetService._insert) and its audit entry; returns its id."""
-    existing = conn.execute(
-        "SELECT id FROM assets WHERE encounter_id = ? AND sha256 = ?", (video.encounter_id, sha)
-    ).fetchone()
-    if existing is not None:
-        return existing["id"]
+    """One frame's asset row and audit entry, linked to its video; returns its id."""
     name = f"{video.filename}@{frame.time_s:.3f}s.jpg"
     verdict = msgspec.structs.replace(frame.verdict, file=name)
     metadata = CaptureMetadata(captured_at=video.metadata.captured_at, width=frame.verdict.figures.width,
                                height=frame.verdict.figures.height)  # fmt: skip
-    asset_id = uuid7()
-    conn.execute(
-        "INSERT INTO assets (id, encounter_id, kind, media_type, sha256, size_bytes, filename, metadata, verdict,"
-        " source_asset_id, created_at, created_by, device_id) VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?)",
-        (asset_id, video.encounter_id, AssetKind.frame.value, MediaType.jpeg.value, sha, len(frame.jpeg), name,
-         msgspec.json.encode(metadata).decode(), msgspec.json.encode(verdict).decode(), video.id, iso(utcnow()),
-         GATEWAY.username, GATEWAY.device_id),
-    )  # fmt: skip
-    audit.append(conn, action="asset.create", user_id=GATEWAY.user_id, device_id=GATEWAY.device_id, kind="asset",
-                 record_id=asset_id, detail=json.dumps({"sha256": sha, "encounter": video.encounter_id}))  # fmt: skip
-    return asset_id
+    return insert_asset_row(conn, GATEWAY, video.encounter_id, AssetKind.frame, MediaType.jpeg, sha, len(frame.jpeg),
+                            name, metadata, verdict, video.id)  # fmt: skip

@@ -153,7 +153,3 @@ def changes_since(conn: sqlite3.Connection, cursor: int, limit: int, kinds: Iter
         [cursor, *wanted, limit],
     )
     return [row_to_record(r) for r in rows]
-
-
-def latest_seq(conn: sqlite3.Connection) -> int:
-    return conn.execute("SELECT COALESCE(MAX(seq), 0) FROM record_versions").fetchone()[0]
