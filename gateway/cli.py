@@ -141,6 +141,32 @@ def cmd_frames(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_reconstruct(args: argparse.Namespace) -> int:
+    import shutil
+
+    from processing.reconstruction.pipeline import run
+    from schemas.reconstruction import Outcome, RulerPoints
+
+    config = _config(args)
+    ruler = None
+    if args.ruler:
+        try:
+            ruler = msgspec.json.decode(Path(args.ruler).read_bytes(), type=RulerPoints)
+        except FileNotFoundError as exc:
+            raise NotFound(f"no ruler file {args.ruler}") from exc
+        except (msgspec.ValidationError, msgspec.DecodeError) as exc:
+            raise InvalidInput(f"ruler file {args.ruler}: {exc}") from exc
+    out = Path(args.out)
+    if args.fresh and out.exists():
+        shutil.rmtree(out)
+    report = run(config, Path(args.source), out, ruler)
+    print(msgspec.json.format(msgspec.json.encode(report), indent=2).decode())
+    if report.outcome is Outcome.failed:
+        log.error("analysis failed: %s", report.reason)
+        return 7
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="burnedge", description="Objective burn assessment at the clinic edge.")
     parser.add_argument("--config", help="TOML configuration file (see docs/configuration.md)")
@@ -167,6 +193,13 @@ def build_parser() -> argparse.ArgumentParser:
     frames.add_argument("video", metavar="VIDEO", help="MP4 or MOV, H.264 or HEVC")
     frames.add_argument("--out", required=True, metavar="DIR", help="folder for the frames and frames.json")
     frames.set_defaults(func=cmd_frames)
+
+    rec = sub.add_parser("reconstruct", help="photos or a video -> scaled 3D surface mesh (PLY, GLB) and report")
+    rec.add_argument("source", metavar="SOURCE", help="folder of photos, or a video (MP4, MOV)")
+    rec.add_argument("--out", required=True, metavar="DIR", help="analysis folder; an interrupted run resumes there")
+    rec.add_argument("--ruler", metavar="FILE", help="JSON with two ruler points marked in 2+ pictures (no marker)")
+    rec.add_argument("--fresh", action="store_true", help="discard what an earlier run left in DIR")
+    rec.set_defaults(func=cmd_reconstruct)
 
     users = sub.add_parser("users", help="manage user accounts").add_subparsers(dest="users_cmd", required=True)
     add = users.add_parser("add", help="create an account (the first administrator, say)")

@@ -170,6 +170,53 @@ class ReadinessConfig(Message):
     """Focal length (35 mm equivalent) assumed when a picture does not say: a phone's main camera."""
 
 
+class ReconstructionConfig(Message):
+    """Turning an accepted multi-view set into a scaled 3D surface (the analysis stages)."""
+
+    min_views: Annotated[int, msgspec.Meta(ge=3)] = 5
+    """Fewer usable pictures than this and the analysis stops before SfM, saying so."""
+    min_registered_fraction: Annotated[float, msgspec.Meta(gt=0, le=1)] = 0.6
+    """SfM must place at least this share of the pictures, or the analysis asks for a retake."""
+    sift_max_features: Annotated[int, msgspec.Meta(ge=500, le=32768)] = 8192
+    """SIFT keypoints kept per picture."""
+    sift_first_octave: Annotated[int, msgspec.Meta(ge=-1, le=1)] = 0
+    """-1 doubles each picture before SIFT (4x slower; only worth it for small pictures)."""
+    sift_peak_threshold: Annotated[float, msgspec.Meta(gt=0)] = 0.004
+    """SIFT contrast threshold; lower than COLMAP's 0.0067 to find enough features on low-texture skin."""
+    max_image_size: Annotated[int, msgspec.Meta(ge=0)] = 2400
+    """Pictures are read for SIFT at most this many pixels on their long side (0: full size)."""
+    video_overlap: Annotated[int, msgspec.Meta(ge=1, le=50)] = 4
+    """Video frames: each frame is matched with this many following frames..."""
+    video_loop_candidates: Annotated[int, msgspec.Meta(ge=0, le=20)] = 3
+    """...and with this many of the most similar earlier frames (loop closure when the orbit returns)."""
+    camera_model: str = "SIMPLE_RADIAL"
+    """COLMAP camera model; one camera is shared by all pictures of a set (one phone)."""
+    marker_dictionary: str = "DICT_4X4_50"
+    """ArUco dictionary of the printed scale marker."""
+    marker_side_mm: Annotated[float, msgspec.Meta(gt=0)] = 20.0
+    """Printed side length of each marker square, outer black edge to outer black edge."""
+    marker_min_views: Annotated[int, msgspec.Meta(ge=2)] = 2
+    """A marker corner is triangulated only from at least this many placed pictures."""
+    max_scale_spread: Annotated[float, msgspec.Meta(gt=0)] = 0.02
+    """Marker edges disagreeing by more than this relative spread make the scale untrustworthy."""
+    roi_radius_mm: Annotated[float, msgspec.Meta(gt=0)] = 70.0
+    """Dense surface is built within this distance of the point the cameras aim at (and the marker)."""
+    stereo_sources: Annotated[int, msgspec.Meta(ge=1, le=8)] = 4
+    """Neighbouring pictures compared with each reference picture in multi-view stereo."""
+    stereo_planes: Annotated[int, msgspec.Meta(ge=16, le=256)] = 64
+    """Depth hypotheses of the coarse plane sweep."""
+    stereo_full_resolution: bool = True
+    """Refine depth at full resolution (slower, sharper); otherwise stop at half resolution."""
+    stereo_min_ncc: Annotated[float, msgspec.Meta(ge=-1, le=1)] = 0.5
+    """A depth is kept only where its photo-consistency (NCC) reaches this."""
+    fusion_min_views: Annotated[int, msgspec.Meta(ge=1)] = 2
+    """A depth must agree with this many other pictures' depth maps to enter the fused cloud."""
+    mesh_cell_mm: Annotated[float, msgspec.Meta(gt=0)] = 0.4
+    """Finest cell of the Poisson surface, in mm (model units when the scale is unknown)."""
+    mesh_density_quantile: Annotated[float, msgspec.Meta(ge=0, lt=1)] = 0.04
+    """Surface parts supported by the fewest points (this share) are trimmed away."""
+
+
 class Config(Message):
     gateway: GatewayConfig = msgspec.field(default_factory=GatewayConfig)
     """The HTTP gateway and its database."""
@@ -185,6 +232,8 @@ class Config(Message):
     """Frames taken from videos."""
     readiness: ReadinessConfig = msgspec.field(default_factory=ReadinessConfig)
     """When a capture set is ready for 3D analysis."""
+    reconstruction: ReconstructionConfig = msgspec.field(default_factory=ReconstructionConfig)
+    """SfM, metric scale, multi-view stereo and meshing."""
 
 
 def load_config(path: str | Path | None = None, environ: dict[str, str] | None = None) -> Config:
@@ -200,7 +249,7 @@ def load_config(path: str | Path | None = None, environ: dict[str, str] | None =
     env = os.environ if environ is None else environ
     sections = (("gateway", GatewayConfig), ("security", SecurityConfig), ("clinical", ClinicalConfig),
                 ("quality", QualityGateConfig), ("uploads", UploadConfig), ("frames", FramesConfig),
-                ("readiness", ReadinessConfig))  # fmt: skip
+                ("readiness", ReadinessConfig), ("reconstruction", ReconstructionConfig))  # fmt: skip
     for section, struct in sections:
         defaults = struct()
         for field in struct.__struct_fields__:

@@ -143,3 +143,17 @@ class TusVersionUnsupported(BurnedgeError):
     status = 412
     slug = "tus-version"
     title = "Unsupported tus version"
+
+
+class CaptureInsufficient(InvalidInput):
+    """The pictures cannot give a measurement (too few placed, one viewpoint, mixed scenes...).
+
+    `code` is a `schemas.reconstruction.FailureCode` value; the detail tells the clinician what to retake.
+    """
+
+    slug = "capture-insufficient"
+    title = "Capture insufficient for 3D analysis"
+
+    def __init__(self, detail: str, *, code: str):
+        super().__init__(detail)
+        self.code = code
