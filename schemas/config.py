@@ -185,6 +185,12 @@ class ReconstructionConfig(Message):
     """SIFT contrast threshold; lower than COLMAP's 0.0067 to find enough features on low-texture skin."""
     max_image_size: Annotated[int, msgspec.Meta(ge=0)] = 2400
     """Pictures are read for SIFT at most this many pixels on their long side (0: full size)."""
+    guided_matching: bool = False
+    """Re-match each verified pair along its epipolar geometry: more matches on weakly textured sets, slower."""
+    min_pose_inliers: Annotated[int, msgspec.Meta(ge=6)] = 30
+    """Matches a picture needs with the model to be placed (COLMAP's default 30; 15 helps sparse texture)."""
+    min_pose_inlier_ratio: Annotated[float, msgspec.Meta(gt=0, le=1)] = 0.25
+    """Share of those matches that must fit the pose (COLMAP's default 0.25)."""
     video_overlap: Annotated[int, msgspec.Meta(ge=1, le=50)] = 4
     """Video frames: each frame is matched with this many following frames..."""
     video_loop_candidates: Annotated[int, msgspec.Meta(ge=0, le=20)] = 3

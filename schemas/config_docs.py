@@ -7,15 +7,15 @@ from __future__ import annotations
 
 import ast
 import inspect
+import typing
 
 from schemas import config as config_module
 
-SECTIONS = {
-    "GatewayConfig": "gateway",
-    "SecurityConfig": "security",
-    "ClinicalConfig": "clinical",
-    "QualityGateConfig": "quality",
-}
+
+def sections() -> dict[str, str]:
+    """Class name -> TOML section, for every section of Config (so a new section cannot go undocumented)."""
+    hints = typing.get_type_hints(config_module.Config)
+    return {hints[name].__name__: name for name in config_module.Config.__struct_fields__}
 
 
 def field_docs() -> dict[str, list[tuple[str, str, str]]]:
@@ -50,7 +50,7 @@ def render() -> str:
         "then command-line flags (`--db`, `--host`, `--port`). Invalid values stop the program with a message.",
         "",
     ]
-    for cls, section in SECTIONS.items():
+    for cls, section in sections().items():
         lines += [f"## [{section}]", "", "| setting | default | meaning |", "|---|---|---|"]
         for name, default, doc in docs[cls]:
             lines.append(f"| `{name}` | `{default}` | {doc} |")

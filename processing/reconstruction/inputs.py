@@ -27,20 +27,25 @@ HEIF_SUFFIXES = {".heic", ".heif"}
 VIDEO_SUFFIXES = {".mp4", ".mov", ".m4v"}
 
 
-def run(config: Config, source: Path, out_dir: Path) -> Path:
-    """Write out_dir/images/ and out_dir/inputs.json; returns the record's path."""
+def run(config: Config, source: Path, out_dir: Path, *, gate: bool = True) -> Path:
+    """Write out_dir/images/ and out_dir/inputs.json; returns the record's path.
+
+    `gate=False` keeps every decodable picture (a set vetted elsewhere, or a non-clinical test set
+    the burn-photo quality gate would misjudge).
+    """
     if not source.exists():
         raise NotFound(f"{source} does not exist")
     tmp = fresh_dir(out_dir / (IMAGES + ".tmp"))
     if source.is_file() and source.suffix.lower() in VIDEO_SUFFIXES:
-        record = _from_video(config, source, tmp)
+        record = _from_video(config, source, tmp, gate)
     elif source.is_dir():
-        record = _from_folder(config, source, tmp)
+        record = _from_folder(config, source, tmp, gate)
     else:
         raise CaptureInsufficient(
             f"{source.name} is neither a folder of photos nor a video (.mp4, .mov)", code=FailureCode.no_pictures
         )
     if not record.pictures:
+        shutil.rmtree(tmp, ignore_errors=True)
         raise CaptureInsufficient(
             f"no usable pictures in {source}" + _why(record.skipped), code=FailureCode.no_pictures
         )
@@ -48,7 +53,7 @@ def run(config: Config, source: Path, out_dir: Path) -> Path:
     return write_json(out_dir / RECORD, record)
 
 
-def _from_folder(config: Config, folder: Path, images: Path) -> InputSet:
+def _from_folder(config: Config, folder: Path, images: Path, gate: bool) -> InputSet:
     pictures, skipped = [], []
     for path in sorted(p for p in folder.iterdir() if p.is_file() and not p.name.startswith(".")):
         suffix = path.suffix.lower()
@@ -57,7 +62,7 @@ def _from_folder(config: Config, folder: Path, images: Path) -> InputSet:
                 skipped.append(SkippedPicture(name=path.name, reasons=["unsupported"]))
             continue
         verdict = gate_file(path, config.quality)
-        if not verdict.accepted:
+        if verdict.figures is None or (gate and not verdict.accepted):
             skipped.append(SkippedPicture(name=path.name, reasons=[r.value for r in verdict.reasons]))
             continue
         if suffix in HEIF_SUFFIXES:
@@ -70,12 +75,12 @@ def _from_folder(config: Config, folder: Path, images: Path) -> InputSet:
     return InputSet(source=str(folder), video=False, pictures=pictures, skipped=skipped)
 
 
-def _from_video(config: Config, video: Path, images: Path) -> InputSet:
+def _from_video(config: Config, video: Path, images: Path, gate: bool) -> InputSet:
     result = extract(video, config.frames, config.quality, name=video.name)
     pictures, skipped = [], []
     for index, frame in enumerate(result.frames):
         name = f"frame_{index:03d}_{frame.time_s:07.2f}s.jpg"
-        if not frame.verdict.accepted:
+        if gate and not frame.verdict.accepted:
             skipped.append(SkippedPicture(name=name, reasons=[r.value for r in frame.verdict.reasons]))
             continue
         (images / name).write_bytes(frame.jpeg)

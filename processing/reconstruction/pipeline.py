@@ -55,7 +55,8 @@ def paths(out: Path) -> dict[str, Path]:
     }
 
 
-def run(config: Config, source: Path, out: Path, ruler: RulerPoints | None = None) -> ReconstructionReport:
+def run(config: Config, source: Path, out: Path, ruler: RulerPoints | None = None, *,
+        gate: bool = True) -> ReconstructionReport:  # fmt: skip
     """Run (or resume) every stage; the report is also written to OUT/report.json."""
     conf = config.reconstruction
     p = paths(out)
@@ -77,7 +78,7 @@ def run(config: Config, source: Path, out: Path, ruler: RulerPoints | None = Non
 
     pictures: list[str] = []
     try:
-        stage("inputs", p["inputs"], lambda: inputs.run(config, source, out))
+        stage("inputs", p["inputs"], lambda: inputs.run(config, source, out, gate=gate))
         record = read_json(p["inputs"], InputSet)
         pictures = record.pictures
         stage("sfm", p["sfm_quality"],

@@ -20,6 +20,8 @@ from schemas.reconstruction import FailureCode, RulerPoints, ScaleEstimate, Scal
 log = logging.getLogger(__name__)
 
 RESULT = "scale.json"
+RULER_MAX_PX = 5.0
+"""A ruler click further than this from where the other clicks put the point is a different spot."""
 
 
 def run(conf: ReconstructionConfig, model_dir: Path, images_dir: Path, out_dir: Path,
@@ -118,14 +120,16 @@ def from_ruler(ruler: RulerPoints, views: list[View], why_not_marker: str) -> Sc
     points, errors = [], []
     for key in ("a", "b"):
         pixels = [chosen[i].undistort_points(np.array([getattr(m, key)]))[0] for i, m in enumerate(marks)]
-        point, err, kept = triangulate(chosen, pixels)
-        if len(kept) < 2:
+        point, err, _ = triangulate(chosen, pixels)
+        off = [m.image for m, e in zip(marks, err, strict=True) if e > RULER_MAX_PX]
+        if off:
             raise CaptureInsufficient(
-                f"ruler point {key.upper()} is marked at places that do not agree between pictures "
-                f"(off by {np.min(err):.0f}+ pixels); mark the same spot in each picture", code=FailureCode.bad_ruler,
-            )  # fmt: skip
+                f"ruler point {key.upper()} in {', '.join(off)} does not match the other pictures "
+                f"(off by up to {np.max(err):.0f} pixels); mark the same spot in each picture",
+                code=FailureCode.bad_ruler,
+            )
         points.append(point)
-        errors += [err[i] for i in kept]
+        errors += list(err)
     length = float(np.linalg.norm(points[0] - points[1]))
     scale = ruler.distance_mm / length
     # A click is good to about its reprojection error; both ends contribute.

@@ -35,9 +35,9 @@ def run(conf: ReconstructionConfig, images_dir: Path, names: list[str], out_dir:
         )
     work = fresh_dir(out_dir / "work")
     database = work / "database.db"
-    _extract(conf, images_dir, names, database)
-    matching = _match(conf, names, images_dir, database, work, video=video)
-    models = _map(conf, images_dir, names, database, work / "models")
+    extract(conf, images_dir, names, database)
+    matching = match(conf, names, images_dir, database, work, video=video)
+    models = incremental_map(conf, images_dir, names, database, work / "models")
     graph = pair_graph(database)
     model = check_model(conf, models, names, graph)
     quality = quality_record(model, models, names, graph, matching)
@@ -51,7 +51,7 @@ def run(conf: ReconstructionConfig, images_dir: Path, names: list[str], out_dir:
     return out_dir / MODEL
 
 
-def _extract(conf: ReconstructionConfig, images_dir: Path, names: list[str], database: Path) -> None:
+def extract(conf: ReconstructionConfig, images_dir: Path, names: list[str], database: Path) -> None:
     options = pycolmap.FeatureExtractionOptions()
     options.max_image_size = conf.max_image_size if conf.max_image_size > 0 else -1
     options.sift.max_num_features = conf.sift_max_features
@@ -65,10 +65,12 @@ def _extract(conf: ReconstructionConfig, images_dir: Path, names: list[str], dat
     )  # fmt: skip
 
 
-def _match(conf: ReconstructionConfig, names: list[str], images_dir: Path, database: Path, work: Path, *,
+def match(conf: ReconstructionConfig, names: list[str], images_dir: Path, database: Path, work: Path, *,
            video: bool) -> str:  # fmt: skip
+    options = pycolmap.FeatureMatchingOptions()
+    options.guided_matching = conf.guided_matching
     if not video:
-        pycolmap.match_exhaustive(database, device=pycolmap.Device.cpu)
+        pycolmap.match_exhaustive(database, matching_options=options, device=pycolmap.Device.cpu)
         return "exhaustive"
     # Frames of one video: neighbours in time, plus the most similar earlier frames so that an
     # orbit that comes back to its start closes the loop (COLMAP's own loop detection needs a
@@ -77,7 +79,8 @@ def _match(conf: ReconstructionConfig, names: list[str], images_dir: Path, datab
     pairs_file = work / "pairs.txt"
     pairs_file.write_text("".join(f"{a} {b}\n" for a, b in pairs))
     pycolmap.match_image_pairs(
-        database, pairing_options=pycolmap.ImportedPairingOptions(match_list_path=str(pairs_file)),
+        database, matching_options=options,
+        pairing_options=pycolmap.ImportedPairingOptions(match_list_path=str(pairs_file)),
         device=pycolmap.Device.cpu,
     )  # fmt: skip
     return "sequential+loop"
@@ -108,12 +111,14 @@ def _thumbnail(path: Path) -> np.ndarray:
     return small / (np.linalg.norm(small) + 1e-9)
 
 
-def _map(conf: ReconstructionConfig, images_dir: Path, names: list[str], database: Path,
+def incremental_map(conf: ReconstructionConfig, images_dir: Path, names: list[str], database: Path,
          out: Path) -> list[pycolmap.Reconstruction]:  # fmt: skip
     fresh_dir(out)
     options = pycolmap.IncrementalPipelineOptions()
     options.min_model_size = 3
     options.image_names = names
+    options.mapper.abs_pose_min_num_inliers = conf.min_pose_inliers
+    options.mapper.abs_pose_min_inlier_ratio = conf.min_pose_inlier_ratio
     options.mapper.init_min_tri_angle = 8.0  # close-range captures: 16 degrees refuses good initial pairs
     options.random_seed = 1
     models = pycolmap.incremental_mapping(database, images_dir, out, options=options)
