@@ -159,11 +159,27 @@ def cmd_reconstruct(args: argparse.Namespace) -> int:
     out = Path(args.out)
     if args.fresh and out.exists():
         shutil.rmtree(out)
-    report = run(config, Path(args.source), out, ruler)
+    report = run(config, Path(args.source), out, ruler, gate=not args.no_gate)
     print(msgspec.json.format(msgspec.json.encode(report), indent=2).decode())
     if report.outcome is Outcome.failed:
         log.error("analysis failed: %s", report.reason)
         return 7
+    return 0
+
+
+def cmd_phantom(args: argparse.Namespace) -> int:
+    from processing.phantom.generate import run, run_series
+    from schemas.phantom import PhantomSpec
+
+    given = {"shape": args.shape, "views": args.views, "width": args.width, "height": args.height, "seed": args.seed,
+             "area_cm2": args.area_cm2, "depth_mm": args.depth_mm, "tone": args.tone}  # fmt: skip
+    try:
+        spec = msgspec.convert({k: v for k, v in given.items() if v is not None} | {"exif": not args.no_exif},
+                               PhantomSpec)  # fmt: skip
+    except msgspec.ValidationError as exc:
+        raise InvalidInput(f"{exc} (see `burnedge phantom --help` for the ranges)") from exc
+    path = (run_series if args.series else run)(spec, Path(args.out))
+    print(json.dumps({"out": str(args.out), "ground_truth": str(path)}))
     return 0
 
 
@@ -199,7 +215,23 @@ def build_parser() -> argparse.ArgumentParser:
     rec.add_argument("--out", required=True, metavar="DIR", help="analysis folder; an interrupted run resumes there")
     rec.add_argument("--ruler", metavar="FILE", help="JSON with two ruler points marked in 2+ pictures (no marker)")
     rec.add_argument("--fresh", action="store_true", help="discard what an earlier run left in DIR")
+    rec.add_argument("--no-gate", action="store_true",
+                     help="use every decodable picture, even those the burn-photo quality gate rejects")  # fmt: skip
     rec.set_defaults(func=cmd_reconstruct)
+
+    phantom = sub.add_parser("phantom", help="render a burn phantom: multi-view photos with exact ground truth")
+    phantom.add_argument("--out", required=True, metavar="DIR", help="folder for images/, masks/, ground_truth.json")
+    phantom.add_argument("--shape", choices=["forearm", "patch", "foot"], help="body part (default forearm)")
+    phantom.add_argument("--views", type=int, help="number of photos, 6-20 (default 12)")
+    phantom.add_argument("--width", type=int, help="image width in pixels (default 1920)")
+    phantom.add_argument("--height", type=int, help="image height in pixels (default 1440)")
+    phantom.add_argument("--seed", type=int, help="seed of every random choice (default 0)")
+    phantom.add_argument("--area-cm2", type=float, help="burn area, 1-40 cm2 (default 14)")
+    phantom.add_argument("--depth-mm", type=float, help="crater depth, 0-8 mm; 0 is a flat burn (default 2)")
+    phantom.add_argument("--tone", choices=["I", "II", "III", "IV", "V", "VI"], help="skin type (default III)")
+    phantom.add_argument("--series", action="store_true", help="four sessions (days 0, 7, 14, 21) of a healing burn")
+    phantom.add_argument("--no-exif", action="store_true", help="leave the focal length out of the JPEGs' EXIF")
+    phantom.set_defaults(func=cmd_phantom)
 
     users = sub.add_parser("users", help="manage user accounts").add_subparsers(dest="users_cmd", required=True)
     add = users.add_parser("add", help="create an account (the first administrator, say)")

@@ -1,0 +1,1 @@
+"""Burn phantoms: rendered multi-view photo sets of a body part with a burn of exactly known geometry."""
