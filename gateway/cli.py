@@ -156,8 +156,12 @@ def cmd_reconstruct(args: argparse.Namespace) -> int:
             raise NotFound(f"no ruler file {args.ruler}") from exc
         except (msgspec.ValidationError, msgspec.DecodeError) as exc:
             raise InvalidInput(f"ruler file {args.ruler}: {exc}") from exc
-    out = Path(args.out)
+    out, source = Path(args.out).resolve(), Path(args.source).resolve()
+    if out == source or out in source.parents or source in out.parents:
+        raise InvalidInput(f"--out {args.out} overlaps the pictures in {args.source}; choose a separate folder")
     if args.fresh and out.exists():
+        if any(out.iterdir()) and not ((out / "inputs.json").exists() or (out / "report.json").exists()):
+            raise InvalidInput(f"--fresh: {args.out} does not look like an analysis folder; not deleting it")
         shutil.rmtree(out)
     report = run(config, Path(args.source), out, ruler, gate=not args.no_gate)
     print(msgspec.json.format(msgspec.json.encode(report), indent=2).decode())

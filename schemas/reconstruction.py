@@ -32,6 +32,8 @@ class FailureCode(enum.StrEnum):
     """Stereo found no consistent surface around the burn."""
     bad_ruler = "bad_ruler"
     """The clinician's ruler points could not be placed in 3D."""
+    internal_error = "internal_error"
+    """A fault in the software, not in the pictures (the report says what it was)."""
 
 
 class ScaleSource(enum.StrEnum):

@@ -116,7 +116,7 @@ def unmarked(phantom, analysis, tmp_path) -> Path:
     out, _, _ = analysis
     copy = tmp_path / "unmarked"
     copy.mkdir()
-    for part in ("inputs.json", "images", "sfm"):
+    for part in ("inputs.json", "fingerprints.json", "images", "sfm"):
         (shutil.copytree if (out / part).is_dir() else shutil.copy)(out / part, copy / part)
     for image in (copy / "images").iterdir():
         image.unlink()
@@ -257,3 +257,68 @@ def test_a_phone_video_is_placed_from_its_frames(tmp_path):
     assert quality["matching"] == "sequential+loop"
     assert quality["images_registered"] >= 0.9 * len(record.pictures)
     assert quality["mean_reprojection_error_px"] < 1.0
+
+
+def test_our_cameras_use_opencv_pixel_centres(analysis):
+    """COLMAP puts pixel centres at +0.5; View.project must land on keypoints shifted by -0.5."""
+    from processing.reconstruction.views import load_views
+
+    out, report, _ = analysis
+    model = pycolmap.Reconstruction(str(out / report.artifacts["sfm_model"]))
+    views = {v.image_id: v for v in load_views(model)}
+    ours, unshifted = [], []
+    for point in list(model.points3D.values())[:300]:
+        for element in point.track.elements:
+            keypoint = np.array(model.images[element.image_id].points2D[element.point2D_idx].xy)
+            projected = views[element.image_id].project(point.xyz[None, :])[0][0]
+            ours.append(np.linalg.norm(projected - (keypoint - 0.5)))
+            unshifted.append(np.linalg.norm(projected - keypoint))
+    assert np.median(ours) < 0.5 * np.median(unshifted)
+
+
+def _synthetic_views(count: int) -> list:
+    from processing.reconstruction.views import View
+
+    K = np.array([[1000.0, 0, 640], [0, 1000.0, 480], [0, 0, 1]])
+    views = []
+    for i in range(count):
+        angle = np.radians(-20 + 40 * i / max(count - 1, 1))
+        R = cv2.Rodrigues(np.array([np.pi + 0.3, angle, 0.0]))[0]
+        t = -R @ np.array([200 * np.sin(angle), -90.0, 250.0])
+        views.append(View(f"v{i}.jpg", i + 1, 1280, 960, K, np.zeros(4), R, t))
+    return views
+
+
+def _sightings(views, quads: dict[int, np.ndarray]) -> dict:
+    found = {}
+    for marker_id, quad in quads.items():
+        found[marker_id] = [[(v, v.project(quad[k][None, :])[0][0]) for v in views] for k in range(4)]
+    return found
+
+
+def test_a_bent_marker_is_not_trusted_for_scale():
+    views = _synthetic_views(4)
+    square = np.array([[0, 0, 0], [20, 0, 0], [20, -20, 0], [0, -20, 0]], dtype=float)
+    good = scale.from_marker(Config().reconstruction, _sightings(views, {1: square}), views)
+    assert good.estimate.source is ScaleSource.marker and good.estimate.mm_per_unit == pytest.approx(1.0, rel=1e-4)
+    assert good.estimate.relative_uncertainty >= scale.SCALE_FLOOR
+    bent = square.copy()
+    bent[2] += [1.5, -1.5, 3.0]  # one corner lifted off the skin: two sides and a diagonal are wrong
+    result = scale.from_marker(Config().reconstruction, _sightings(views, {1: bent}), views)
+    assert result.estimate.source is ScaleSource.none and result.estimate.mm_per_unit is None
+    assert "disagree" in result.estimate.note
+
+
+def test_adding_a_ruler_later_reruns_the_scale_and_what_follows(phantom, unmarked):
+    first = pipeline.run(Config(), phantom / "images", unmarked)
+    assert first.scale.source is ScaleSource.none
+    second = pipeline.run(Config(), phantom / "images", unmarked, _ruler(phantom, views=3))
+    assert [t.stage for t in second.timings if not t.resumed] == ["scale", "dense", "mesh"]
+    assert second.scale.source is ScaleSource.ruler and second.dense.units == "mm"
+
+
+def test_fresh_refuses_to_delete_the_pictures(phantom, tmp_path):
+    r = subprocess.run([sys.executable, "-m", "gateway.cli", "reconstruct", str(phantom / "images"), "--out",
+                        str(phantom), "--fresh"], cwd=REPO, capture_output=True, text=True, timeout=60)  # fmt: skip
+    assert r.returncode == 2 and "overlaps the pictures" in r.stderr
+    assert len(list((phantom / "images").iterdir())) == 8

@@ -34,13 +34,15 @@ class DenseInfo(msgspec.Struct, frozen=True, kw_only=True):
     views_with_depth: int
     fused_points: int
     units: str
+    units_per_mm: float
+    """1 when scaled; otherwise model units per (assumed) mm, so mm-sized settings keep their proportions."""
 
 
 def run(conf: ReconstructionConfig, model_dir: Path, images_dir: Path, scale_path: Path, out_dir: Path) -> Path:
     """Write out_dir/fused_points.ply (output frame, with normals and colours) and dense_info.json."""
     scale = read_json(scale_path, ScaleResult)
     views = [to_output_frame(v, np.array(scale.model_to_output)) for v in load_views(read_model(model_dir))]
-    region = _region(conf, views, scale)
+    region, units_per_mm = _region(conf, views, scale)
     pictures = {v.name: stereo.Picture.build(v, read_gray(images_dir / v.name)) for v in views}
     maps = []
     for view in views:
@@ -72,7 +74,8 @@ def run(conf: ReconstructionConfig, model_dir: Path, images_dir: Path, scale_pat
     tmp.replace(out_dir / POINTS)
     units = "mm" if scale.estimate.mm_per_unit else "model units"
     info = DenseInfo(roi_centres=region.centres.tolist(), roi_radii=region.radii.tolist(),
-                     views_with_depth=len(maps), fused_points=len(points), units=units)  # fmt: skip
+                     views_with_depth=len(maps), fused_points=len(points), units=units,
+                     units_per_mm=units_per_mm)  # fmt: skip
     write_json(out_dir / INFO, info)
     log.info("dense: %d depth maps, %d fused points", len(maps), len(points))
     return out_dir / POINTS
@@ -87,18 +90,20 @@ def to_output_frame(view: View, similarity: np.ndarray) -> View:
     return View(view.name, view.image_id, view.width, view.height, view.K, view.dist, R, t)
 
 
-def _region(conf: ReconstructionConfig, views: list[View], scale: ScaleResult) -> Region:
+def _region(conf: ReconstructionConfig, views: list[View], scale: ScaleResult) -> tuple[Region, float]:
+    """The region of interest, and model units per mm (1 when scaled; guessed from a typical
+    phone-to-skin distance otherwise, only to size the region and the mesh cells)."""
     similarity = np.array(scale.model_to_output)
-    if scale.estimate.mm_per_unit:
-        radius = conf.roi_radius_mm
-    else:
+    units_per_mm = 1.0
+    if not scale.estimate.mm_per_unit:
         distance = np.median([np.linalg.norm(v.centre - aim_point(views)) for v in views])
-        radius = conf.roi_radius_mm / TYPICAL_DISTANCE_MM * float(distance)
+        units_per_mm = float(distance) / TYPICAL_DISTANCE_MM
+    radius = conf.roi_radius_mm * units_per_mm
     marker = None
     if scale.marker_corners_model and scale.estimate.mm_per_unit:
         model_points = np.vstack([np.array(q) for q in scale.marker_corners_model.values()])
         marker = model_points @ similarity[:3, :3].T + similarity[:3, 3]
-    return region_of_interest(views, radius, marker)
+    return region_of_interest(views, radius, marker), units_per_mm
 
 
 def choose_sources(ref: View, views: list[View], region: Region, count: int) -> list[View]:

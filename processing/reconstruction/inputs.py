@@ -66,7 +66,7 @@ def _from_folder(config: Config, folder: Path, images: Path, gate: bool) -> Inpu
             skipped.append(SkippedPicture(name=path.name, reasons=[r.value for r in verdict.reasons]))
             continue
         if suffix in HEIF_SUFFIXES:
-            target = images / (path.stem + ".jpg")
+            target = images / (path.name + ".jpg")  # X.heic -> X.heic.jpg: cannot clash with a real X.jpg
             _heif_to_jpeg(path, target)
         else:
             target = images / path.name

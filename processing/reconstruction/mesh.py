@@ -31,10 +31,11 @@ def run(conf: ReconstructionConfig, dense_dir: Path, out_dir: Path) -> Path:
     """Write surface.ply, surface.glb (output frame; mm when scaled) and dense_quality.json."""
     info = read_json(dense_dir / INFO, DenseInfo)
     cloud = o3d.io.read_point_cloud(str(dense_dir / "fused_points.ply"))
-    cloud = cloud.voxel_down_sample(conf.mesh_cell_mm * VOXEL_FRACTION)
+    cell = conf.mesh_cell_mm * info.units_per_mm
+    cloud = cloud.voxel_down_sample(cell * VOXEL_FRACTION)
     region = Region(np.array(info.roi_centres), np.array(info.roi_radii))
     extent = float(np.max(cloud.get_max_bound() - cloud.get_min_bound()))
-    depth = int(math.ceil(math.log2(max(extent, 1e-9) / conf.mesh_cell_mm)))
+    depth = int(math.ceil(math.log2(max(extent, 1e-9) / cell)))
     mesh, densities = o3d.geometry.TriangleMesh.create_from_point_cloud_poisson(
         cloud, depth=min(max(depth, 6), 11), scale=1.1, linear_fit=False
     )

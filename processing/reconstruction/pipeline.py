@@ -7,22 +7,27 @@
     OUT/mesh/surface.ply, surface.glb   stage 3b: surface mesh
     OUT/report.json                     the outcome
 
-A stage whose artifact exists is skipped, so an interrupted analysis resumes at the first
-unfinished stage; once a stage runs, every later stage runs again.
+A stage whose artifact exists, built from the same inputs, settings and ruler (fingerprints.json),
+is skipped, so an interrupted analysis resumes at the first unfinished stage. A stage that runs
+first removes its own and every later stage's completion artifact, so nothing stale survives it.
 """
 
 from __future__ import annotations
 
+import hashlib
+import json
 import logging
 import time
 from collections.abc import Callable
 from importlib import metadata
 from pathlib import Path
 
+import msgspec
+
 from processing.reconstruction import dense, inputs, mesh, scale, sfm
 from processing.reconstruction.artifacts import read_json, write_json
 from schemas.config import Config
-from schemas.errors import CaptureInsufficient
+from schemas.errors import CaptureInsufficient, NotFound
 from schemas.reconstruction import (
     DenseQuality,
     FailureCode,
@@ -55,6 +60,32 @@ def paths(out: Path) -> dict[str, Path]:
     }
 
 
+STAGES = ("inputs", "sfm", "scale", "dense", "mesh")
+DONE = {"inputs": "inputs", "sfm": "sfm_quality", "scale": "scale", "dense": "dense_info", "mesh": "mesh_quality"}
+"""The artifact each stage writes last: its presence (with a matching fingerprint) means the stage is done."""
+FINGERPRINTS = "fingerprints.json"
+
+
+def fingerprints(config: Config, source: Path, ruler: RulerPoints | None, gate: bool) -> dict[str, str]:
+    """What each stage was built from, hashed: a changed source, setting or ruler reruns that stage and later ones."""
+    files = sorted(source.iterdir()) if source.is_dir() else [source]
+    listing = [(f.name, f.stat().st_size, f.stat().st_mtime_ns) for f in files if f.is_file()]
+    chain: dict[str, str] = {}
+    parts = {
+        "inputs": [str(source.resolve()), listing, msgspec.to_builtins(config.quality),
+                   msgspec.to_builtins(config.frames), gate],
+        "sfm": [msgspec.to_builtins(config.reconstruction)],
+        "scale": [msgspec.to_builtins(ruler) if ruler else None],
+        "dense": [],
+        "mesh": [],
+    }  # fmt: skip
+    previous = ""
+    for name in STAGES:
+        previous = hashlib.sha256(json.dumps([previous, parts[name]], sort_keys=True).encode()).hexdigest()
+        chain[name] = previous
+    return chain
+
+
 def run(config: Config, source: Path, out: Path, ruler: RulerPoints | None = None, *,
         gate: bool = True) -> ReconstructionReport:  # fmt: skip
     """Run (or resume) every stage; the report is also written to OUT/report.json."""
@@ -62,42 +93,58 @@ def run(config: Config, source: Path, out: Path, ruler: RulerPoints | None = Non
     p = paths(out)
     for folder in ("sfm", "scale", "dense", "mesh"):
         (out / folder).mkdir(parents=True, exist_ok=True)
+    (out / REPORT).unlink(missing_ok=True)
+    if not source.exists():
+        raise NotFound(f"{source} does not exist")
+    wanted = fingerprints(config, source, ruler, gate)
+    stored = json.loads((out / FINGERPRINTS).read_text()) if (out / FINGERPRINTS).exists() else {}
     timings: list[StageTiming] = []
-    rerun = False
 
-    def stage(name: str, done: Path, work: Callable[[], object]) -> None:
-        nonlocal rerun
-        if done.exists() and not rerun:
+    def stage(name: str, work: Callable[[], object]) -> None:
+        if p[DONE[name]].exists() and stored.get(name) == wanted[name]:
             timings.append(StageTiming(stage=name, seconds=0.0, resumed=True))
             return
-        rerun = True
+        for later in STAGES[STAGES.index(name) :]:  # nothing downstream may outlive this stage's rerun
+            p[DONE[later]].unlink(missing_ok=True)
+            stored.pop(later, None)
+        write_json(out / FINGERPRINTS, stored)
         start = time.perf_counter()
         work()
+        stored[name] = wanted[name]
+        write_json(out / FINGERPRINTS, stored)
         timings.append(StageTiming(stage=name, seconds=round(time.perf_counter() - start, 2)))
         log.info("stage %s done in %.1f s", name, timings[-1].seconds)
 
     pictures: list[str] = []
     try:
-        stage("inputs", p["inputs"], lambda: inputs.run(config, source, out, gate=gate))
+        stage("inputs", lambda: inputs.run(config, source, out, gate=gate))
         record = read_json(p["inputs"], InputSet)
         pictures = record.pictures
-        stage("sfm", p["sfm_quality"],
-              lambda: sfm.run(conf, p["images"], record.pictures, out / "sfm", video=record.video))  # fmt: skip
-        stage("scale", p["scale"], lambda: scale.run(conf, p["sfm_model"], p["images"], out / "scale", ruler))
-        stage("dense", p["dense_info"], lambda: dense.run(conf, p["sfm_model"], p["images"], p["scale"], out / "dense"))
-        stage("mesh", p["mesh_quality"], lambda: mesh.run(conf, out / "dense", out / "mesh"))
+        stage("sfm", lambda: sfm.run(conf, p["images"], record.pictures, out / "sfm", video=record.video))
+        stage("scale", lambda: scale.run(conf, p["sfm_model"], p["images"], out / "scale", ruler))
+        stage("dense", lambda: dense.run(conf, p["sfm_model"], p["images"], p["scale"], out / "dense"))
+        stage("mesh", lambda: mesh.run(conf, out / "dense", out / "mesh"))
     except CaptureInsufficient as exc:
-        report = ReconstructionReport(
-            outcome=Outcome.failed, reason=exc.detail, failure=FailureCode(exc.code), pictures=pictures,
-            sfm=_maybe(p["sfm_quality"], SfmQuality), scale=_scale(p["scale"]), timings=timings,
-            software=software_versions(),
-        )  # fmt: skip
-        write_json(out / REPORT, report)
-        return report
+        return _failed(out, p, exc.detail, FailureCode(exc.code), pictures, timings)
+    except Exception as exc:
+        _failed(out, p, f"the analysis stopped on an unexpected error ({exc}); the pictures are kept, "
+                        "please report this to your IT contact", FailureCode.internal_error, pictures, timings)  # fmt: skip
+        raise
     report = ReconstructionReport(
         outcome=Outcome.complete, pictures=pictures, sfm=read_json(p["sfm_quality"], SfmQuality),
         scale=_scale(p["scale"]), dense=read_json(p["mesh_quality"], DenseQuality),
         artifacts={k: str(v.relative_to(out)) for k, v in p.items() if v.exists()}, timings=timings,
+        software=software_versions(),
+    )  # fmt: skip
+    write_json(out / REPORT, report)
+    return report
+
+
+def _failed(out: Path, p: dict[str, Path], reason: str, code: FailureCode, pictures: list[str],
+            timings: list[StageTiming]) -> ReconstructionReport:  # fmt: skip
+    report = ReconstructionReport(
+        outcome=Outcome.failed, reason=reason, failure=code, pictures=pictures,
+        sfm=_maybe(p["sfm_quality"], SfmQuality), scale=_scale(p["scale"]), timings=timings,
         software=software_versions(),
     )  # fmt: skip
     write_json(out / REPORT, report)

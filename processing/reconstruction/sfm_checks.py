@@ -77,20 +77,22 @@ def _pair(pair_id: int) -> tuple[int, int]:
 def check_model(conf: ReconstructionConfig, models: list[pycolmap.Reconstruction], names: list[str],
                 graph: PairGraph) -> pycolmap.Reconstruction:  # fmt: skip
     """The largest model, or CaptureInsufficient saying why the pictures cannot be measured."""
-    groups = [g for g in graph.components() if len(g) >= 3]
-    if len(groups) >= 2:
-        raise CaptureInsufficient(
-            f"the pictures show {len(groups)} different scenes that share nothing "
-            f"({_list(groups[0])} versus {_list(groups[1])}); keep only the pictures of this burn",
-            code=FailureCode.mixed_scenes,
-        )
     needed = max(3, math.ceil(conf.min_registered_fraction * len(names)))
     placed = models[0].num_reg_images() if models else 0
     if placed < needed:
+        # Separate groups only matter when they stop the main one from being big enough; a few
+        # stray pictures beside a good set are simply left out (and listed in the quality record).
+        groups = [g for g in graph.components() if len(g) >= 3]
+        if len(groups) >= 2:
+            raise CaptureInsufficient(
+                f"the pictures show {len(groups)} different scenes that share nothing "
+                f"({_list(groups[0])} versus {_list(groups[1])}); keep only the pictures of this burn",
+                code=FailureCode.mixed_scenes,
+            )
         if graph.rotation_only_share() > 0.5:
             raise CaptureInsufficient(
-                "the pictures were all taken from about the same spot, so no depth can be seen; "
-                "retake walking around the burn (about a quarter circle), keeping it in the centre",
+                "the pictures look as if taken from about the same spot (or show only a flat area), so no "
+                "depth can be seen; retake walking around the burn (about a quarter circle), keeping it in the centre",
                 code=FailureCode.degenerate_capture,
             )
         raise CaptureInsufficient(

@@ -33,6 +33,8 @@ class Picture:
     @classmethod
     def build(cls, view: View, gray: np.ndarray) -> Picture:
         image = view.undistort_image(gray).astype(np.float32) / 255.0
+        h, w = image.shape
+        image = image[: h // 4 * 4, : w // 4 * 4]  # exact halvings keep every level's pixels aligned
         pyramid = {1: image}
         for factor in (2, 4):
             prev = pyramid[factor // 2]
