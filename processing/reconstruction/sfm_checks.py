@@ -16,6 +16,9 @@ from schemas.reconstruction import FailureCode, SfmQuality
 
 MIN_INLIERS = 15
 MIN_TRI_ANGLE_DEG = 2.0
+MIN_BASELINE_RATIO = 0.05
+"""Widest distance between two camera positions over the median distance to the scene: below this the
+pictures were taken from one spot (a bogus model of a pure rotation can still show wide angles)."""
 _ROTATION_ONLY = {int(pycolmap.TwoViewGeometryConfiguration.PANORAMIC),
                   int(pycolmap.TwoViewGeometryConfiguration.PLANAR_OR_PANORAMIC)}  # fmt: skip
 _UNUSABLE = {int(pycolmap.TwoViewGeometryConfiguration.UNDEFINED),
@@ -101,13 +104,26 @@ def check_model(conf: ReconstructionConfig, models: list[pycolmap.Reconstruction
             code=FailureCode.too_few_placed,
         )
     angle = median_triangulation_angle(models[0])
-    if angle < MIN_TRI_ANGLE_DEG:
+    rotation_only = graph.rotation_only_share() > 0.5
+    if angle < MIN_TRI_ANGLE_DEG or baseline_ratio(models[0]) < MIN_BASELINE_RATIO or (
+        rotation_only and angle < 2 * MIN_TRI_ANGLE_DEG
+    ):
         raise CaptureInsufficient(
             f"the pictures were taken from nearly one spot (median viewing angle {angle:.1f} degrees); "
             "retake walking around the burn so it is seen from clearly different directions",
             code=FailureCode.degenerate_capture,
         )
     return models[0]
+
+
+def baseline_ratio(model: pycolmap.Reconstruction) -> float:
+    centres = np.array([model.images[i].projection_center() for i in model.reg_image_ids()])
+    if len(centres) < 2 or not model.num_points3D():
+        return 0.0
+    widest = float(np.max(np.linalg.norm(centres[:, None] - centres[None], axis=2)))
+    points = np.array([p.xyz for p in model.points3D.values()])
+    depth = float(np.median(np.linalg.norm(points - centres.mean(axis=0), axis=1)))
+    return widest / max(depth, 1e-12)
 
 
 def _list(names: list[str]) -> str:
