@@ -40,7 +40,8 @@ def phantom_row(images_parent: Path, work: Path) -> dict:
     if report.outcome.value != "complete":
         return {"phantom": images_parent.name, "outcome": report.outcome.value, "reason": report.reason}
     accuracy = evaluate(work, images_parent).as_dict()
-    accuracy["sparse_baseline_median_mm"] = round(sparse_baseline(work, images_parent), 3)
+    baseline = sparse_baseline(work, images_parent)
+    accuracy["sparse_baseline_median_mm"] = None if baseline is None else round(baseline, 3)
     accuracy["seconds"] = round(seconds, 1)
     accuracy["scale_source"] = report.scale.source.value
     accuracy["reprojection_px"] = report.sfm.mean_reprojection_error_px
