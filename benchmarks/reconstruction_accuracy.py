@@ -48,17 +48,12 @@ def phantom_row(images_parent: Path, work: Path) -> dict:
     return {k: (round(v, 4) if isinstance(v, float) else v) for k, v in accuracy.items()}
 
 
-THOROUGH = {"sift_first_octave": -1, "sift_max_features": 16384, "guided_matching": True,
-            "min_pose_inliers": 15, "min_pose_inlier_ratio": 0.1}  # fmt: skip
-"""Settings for weakly textured sets shot far apart (the skull: dark background, every second photo)."""
-
-
 def skull_row(work: Path, thorough: bool) -> dict:
     folder = SHARED / "datasets" / "skull-multiview" / "images"
     names = sorted(p.name for p in folder.iterdir() if p.suffix.lower() == ".jpg")
     conf = Config().reconstruction
     if thorough:
-        conf = msgspec.structs.replace(conf, **THOROUGH)
+        conf = msgspec.structs.replace(conf, **sfm.THOROUGH)
     t = time.perf_counter()
     database = work / "database.db"
     work.mkdir(parents=True, exist_ok=True)

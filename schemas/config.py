@@ -191,6 +191,10 @@ class ReconstructionConfig(Message):
     """Matches a picture needs with the model to be placed (COLMAP's default 30; 15 helps sparse texture)."""
     min_pose_inlier_ratio: Annotated[float, msgspec.Meta(gt=0, le=1)] = 0.25
     """Share of those matches that must fit the pose (COLMAP's default 0.25)."""
+    thorough_retry: bool = True
+    """When too few pictures are placed, try once more with thorough settings (SIFT on doubled pictures,
+    16384 features, guided matching, looser pose thresholds): several times slower, but it rescues
+    weakly textured sets."""
     video_overlap: Annotated[int, msgspec.Meta(ge=1, le=50)] = 4
     """Video frames: each frame is matched with this many following frames..."""
     video_loop_candidates: Annotated[int, msgspec.Meta(ge=0, le=20)] = 3

@@ -31,7 +31,7 @@ def field_docs() -> dict[str, list[tuple[str, str, str]]]:
             if isinstance(stmt, ast.AnnAssign) and isinstance(stmt.target, ast.Name):
                 doc = ""
                 if isinstance(following, ast.Expr) and isinstance(following.value, ast.Constant):
-                    doc = str(following.value.value).strip()
+                    doc = " ".join(str(following.value.value).split())
                 default = ast.unparse(stmt.value) if stmt.value is not None else ""
                 fields.append((stmt.target.id, default, doc))
         out[node.name] = fields

@@ -72,6 +72,8 @@ class SfmQuality(Frozen):
     """Focal length SfM settled on, in pixels of the input pictures."""
     median_triangulation_angle_deg: float
     """Median angle under which the sparse points were seen; near 0 means a capture from one spot."""
+    thorough: bool = False
+    """True when the fast settings placed too few pictures and the slower, thorough second attempt was used."""
 
 
 class ScaleEstimate(Frozen):

@@ -322,3 +322,19 @@ def test_fresh_refuses_to_delete_the_pictures(phantom, tmp_path):
                         str(phantom), "--fresh"], cwd=REPO, capture_output=True, text=True, timeout=60)  # fmt: skip
     assert r.returncode == 2 and "overlaps the pictures" in r.stderr
     assert len(list((phantom / "images").iterdir())) == 8
+
+
+def test_pictures_that_cannot_be_placed_get_a_retake_request_after_a_thorough_retry(phantom, tmp_path):
+    folder = tmp_path / "half-unplaceable"
+    folder.mkdir()
+    for name in sorted(p.name for p in (phantom / "images").iterdir())[:4]:
+        shutil.copy(phantom / "images" / name, folder / name)
+    rng = np.random.default_rng(5)
+    for i in range(4):  # sharp, well exposed, but of nothing the other pictures show
+        coarse = rng.integers(0, 255, (24, 32, 3), dtype=np.uint8)  # smooth blobs: few features, fast to match
+        noise = cv2.resize(coarse, (960, 720), interpolation=cv2.INTER_CUBIC)
+        cv2.imwrite(str(folder / f"other_{i}.jpg"), noise, [cv2.IMWRITE_JPEG_QUALITY, 92])
+    report = pipeline.run(Config(), folder, tmp_path / "out", gate=False)  # the gate would refuse the noise
+    assert report.outcome is Outcome.failed and report.failure is FailureCode.too_few_placed, report.reason
+    assert "of 8 pictures could be placed" in report.reason and "walking around the burn" in report.reason
+    assert (tmp_path / "out" / "sfm" / "work" / "database.db").exists()  # the thorough attempt's, kept for IT

@@ -6,6 +6,7 @@ import logging
 from pathlib import Path
 
 import cv2
+import msgspec
 import numpy as np
 import pycolmap
 
@@ -13,12 +14,16 @@ from processing.reconstruction.artifacts import fresh_dir, publish_dir, write_js
 from processing.reconstruction.sfm_checks import check_model, pair_graph, quality_record
 from schemas.config import ReconstructionConfig
 from schemas.errors import CaptureInsufficient
-from schemas.reconstruction import FailureCode
+from schemas.reconstruction import FailureCode, SfmQuality
 
 log = logging.getLogger(__name__)
 
 QUALITY = "sfm_quality.json"
 MODEL = "model"
+THOROUGH = {"sift_first_octave": -1, "sift_max_features": 16384, "guided_matching": True,
+            "min_pose_inliers": 15, "min_pose_inlier_ratio": 0.1}  # fmt: skip
+"""Settings of the second attempt, for weakly textured sets or pictures taken far apart: on the real
+skull photos they place 33 of 33 where the fast defaults place 14 (at about 20 times the cost)."""
 
 
 def run(conf: ReconstructionConfig, images_dir: Path, names: list[str], out_dir: Path, *, video: bool) -> Path:
@@ -33,14 +38,14 @@ def run(conf: ReconstructionConfig, images_dir: Path, names: list[str], out_dir:
             "taken while walking around the burn",
             code=FailureCode.too_few_views,
         )
-    work = fresh_dir(out_dir / "work")
-    database = work / "database.db"
-    extract(conf, images_dir, names, database)
-    matching = match(conf, names, images_dir, database, work, video=video)
-    models = incremental_map(conf, images_dir, names, database, work / "models")
-    graph = pair_graph(database)
-    model = check_model(conf, models, names, graph)
-    quality = quality_record(model, models, names, graph, matching)
+    try:
+        model, quality, database = _attempt(conf, images_dir, names, out_dir, video=video, thorough=False)
+    except CaptureInsufficient as exc:
+        if exc.code != FailureCode.too_few_placed or not conf.thorough_retry:
+            raise
+        log.info("SfM placed too few pictures (%s); trying once more with thorough settings", exc.detail)
+        model, quality, database = _attempt(msgspec.structs.replace(conf, **THOROUGH), images_dir, names, out_dir,
+                                            video=video, thorough=True)  # fmt: skip
     tmp = fresh_dir(out_dir / (MODEL + ".tmp"))
     model.write_binary(str(tmp))
     publish_dir(tmp, out_dir / MODEL)
@@ -49,6 +54,19 @@ def run(conf: ReconstructionConfig, images_dir: Path, names: list[str], out_dir:
     write_json(out_dir / QUALITY, quality)
     log.info("SfM placed %d of %d pictures", quality.images_registered, quality.images_used)
     return out_dir / MODEL
+
+
+def _attempt(conf: ReconstructionConfig, images_dir: Path, names: list[str], out_dir: Path, *, video: bool,
+             thorough: bool) -> tuple[pycolmap.Reconstruction, SfmQuality, Path]:  # fmt: skip
+    work = fresh_dir(out_dir / "work")
+    database = work / "database.db"
+    extract(conf, images_dir, names, database)
+    matching = match(conf, names, images_dir, database, work, video=video)
+    models = incremental_map(conf, images_dir, names, database, work / "models")
+    graph = pair_graph(database)
+    model = check_model(conf, models, names, graph)
+    quality = quality_record(model, models, names, graph, matching)
+    return model, msgspec.structs.replace(quality, thorough=thorough), database
 
 
 def extract(conf: ReconstructionConfig, images_dir: Path, names: list[str], database: Path) -> None:

@@ -105,8 +105,10 @@ def check_model(conf: ReconstructionConfig, models: list[pycolmap.Reconstruction
         )
     angle = median_triangulation_angle(models[0])
     rotation_only = graph.rotation_only_share() > 0.5
-    if angle < MIN_TRI_ANGLE_DEG or baseline_ratio(models[0]) < MIN_BASELINE_RATIO or (
-        rotation_only and angle < 2 * MIN_TRI_ANGLE_DEG
+    if (
+        angle < MIN_TRI_ANGLE_DEG
+        or baseline_ratio(models[0]) < MIN_BASELINE_RATIO
+        or (rotation_only and angle < 2 * MIN_TRI_ANGLE_DEG)
     ):
         raise CaptureInsufficient(
             f"the pictures were taken from nearly one spot (median viewing angle {angle:.1f} degrees); "
