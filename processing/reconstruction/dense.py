@@ -6,6 +6,7 @@ import logging
 import math
 from pathlib import Path
 
+import cv2
 import msgspec
 import numpy as np
 import open3d as o3d
@@ -96,7 +97,8 @@ def _region(conf: ReconstructionConfig, views: list[View], scale: ScaleResult) -
     similarity = np.array(scale.model_to_output)
     units_per_mm = 1.0
     if not scale.estimate.mm_per_unit:
-        distance = np.median([np.linalg.norm(v.centre - aim_point(views)) for v in views])
+        aim = aim_point(views)
+        distance = np.median([np.linalg.norm(v.centre - aim) for v in views])
         units_per_mm = float(distance) / TYPICAL_DISTANCE_MM
     radius = conf.roi_radius_mm * units_per_mm
     marker = None
@@ -123,8 +125,6 @@ def choose_sources(ref: View, views: list[View], region: Region, count: int) -> 
 
 
 def _to_full_resolution(dm: stereo.DepthMap) -> stereo.DepthMap:
-    import cv2
-
     h, w = dm.depth.shape
     size = (w * 2, h * 2)
     depth = cv2.resize(dm.depth, size, interpolation=cv2.INTER_LINEAR)

@@ -64,8 +64,8 @@ def _attempt(conf: ReconstructionConfig, images_dir: Path, names: list[str], out
     matching = match(conf, names, images_dir, database, work, video=video)
     models = incremental_map(conf, images_dir, names, database, work / "models")
     graph = pair_graph(database)
-    model = check_model(conf, models, names, graph)
-    quality = quality_record(model, models, names, graph, matching)
+    model, angle = check_model(conf, models, names, graph)
+    quality = quality_record(model, models, names, graph, matching, angle)
     return model, msgspec.structs.replace(quality, thorough=thorough), database
 
 

@@ -78,8 +78,9 @@ def _pair(pair_id: int) -> tuple[int, int]:
 
 
 def check_model(conf: ReconstructionConfig, models: list[pycolmap.Reconstruction], names: list[str],
-                graph: PairGraph) -> pycolmap.Reconstruction:  # fmt: skip
-    """The largest model, or CaptureInsufficient saying why the pictures cannot be measured."""
+                graph: PairGraph) -> tuple[pycolmap.Reconstruction, float]:  # fmt: skip
+    """The largest model and its median triangulation angle, or CaptureInsufficient saying why the
+    pictures cannot be measured."""
     needed = max(3, math.ceil(conf.min_registered_fraction * len(names)))
     placed = models[0].num_reg_images() if models else 0
     if placed < needed:
@@ -115,7 +116,7 @@ def check_model(conf: ReconstructionConfig, models: list[pycolmap.Reconstruction
             "retake walking around the burn so it is seen from clearly different directions",
             code=FailureCode.degenerate_capture,
         )
-    return models[0]
+    return models[0], angle
 
 
 def baseline_ratio(model: pycolmap.Reconstruction) -> float:
@@ -149,7 +150,7 @@ def median_triangulation_angle(model: pycolmap.Reconstruction, sample: int = 300
 
 
 def quality_record(model: pycolmap.Reconstruction, models: list[pycolmap.Reconstruction], names: list[str],
-                   graph: PairGraph, matching: str) -> SfmQuality:  # fmt: skip
+                   graph: PairGraph, matching: str, angle: float) -> SfmQuality:  # fmt: skip
     errors = np.array([p.error for p in model.points3D.values()]) if model.num_points3D() else np.zeros(1)
     registered = {model.images[i].name for i in model.reg_image_ids()}
     matched = {p: n for p, n in graph.matches.items() if n > 0}
@@ -171,5 +172,5 @@ def quality_record(model: pycolmap.Reconstruction, models: list[pycolmap.Reconst
         mean_track_length=round(model.compute_mean_track_length(), 2),
         models_found=len(models),
         focal_px=round(float(camera.mean_focal_length()), 2),
-        median_triangulation_angle_deg=round(median_triangulation_angle(model), 2),
+        median_triangulation_angle_deg=round(angle, 2),
     )

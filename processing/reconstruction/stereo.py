@@ -123,11 +123,16 @@ def _sweep(ref: Picture, sources: list[Picture], crop: tuple[int, int, int, int]
     inverse = np.linspace(1.0 / near, 1.0 / far, planes)
     costs = np.full((planes, *image.shape), -1.0, dtype=np.float32)
     normal = np.array([0.0, 0.0, 1.0])
+    # Per source, the plane homography is K_src (R + t n^T / d) K_ref^-1: only 1/d changes per plane.
+    parts = []
+    for src in sources:
+        rotation, translation = _relative(ref.view, src.view)
+        K_src = src.K(factor)
+        parts.append((src, K_src @ rotation @ K_ref_inv, K_src @ np.outer(translation, normal) @ K_ref_inv))
     for i, inv_depth in enumerate(inverse):
         per_source = []
-        for src in sources:
-            rotation, translation = _relative(ref.view, src.view)
-            homography = src.K(factor) @ (rotation + np.outer(translation, normal) * inv_depth) @ K_ref_inv
+        for src, fixed, per_inverse_depth in parts:
+            homography = fixed + per_inverse_depth * inv_depth
             warped = cv2.warpPerspective(src.pyramid[factor], homography, image.shape[::-1],
                                          flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP, borderValue=0.0)  # fmt: skip
             per_source.append(_ncc(image, ref_mean, ref_var, warped, window))
