@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import datetime as dt
+import faulthandler
 import os
 import socket
 import subprocess
@@ -157,3 +158,27 @@ def gateway_process(tmp_path: Path) -> Iterator[GatewayProcess]:
 
 def open_db(path: str | Path) -> Database:
     return Database(path)
+
+
+# Modules that load the big native libraries (pycolmap, Open3D, SciPy's spatial code, onnxruntime). They run
+# after the gateway's threaded tests: CI once crashed (SIGSEGV, no traceback) in an upload test that ran after
+# these libraries were loaded in the same process, and never when they were not. The gateway itself will run
+# analyses in a separate worker process for the same reason.
+NATIVE_MODULES = {"test_reconstruction.py", "test_phantom.py", "test_burn_surface.py", "test_analysis.py",
+                  "test_segmentation.py"}  # fmt: skip
+
+
+def pytest_collection_modifyitems(session, config, items) -> None:
+    items.sort(key=lambda item: item.path.name in NATIVE_MODULES)  # stable: each group keeps its order
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_runtest_setup(item) -> None:
+    # pycolmap installs glog's crash handler over Python's on import; glog writes into pytest's capture, which
+    # dies with the process, so a crash would leave no trace. Put Python's handler (on the real stderr) back.
+    from _pytest.faulthandler import fault_handler_stderr_fd_key
+
+    fd = item.config.stash.get(fault_handler_stderr_fd_key, None)
+    if fd is not None:
+        faulthandler.disable()  # enable() alone would keep the replaced handler: it only installs once
+        faulthandler.enable(file=fd, all_threads=True)
