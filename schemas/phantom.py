@@ -43,6 +43,19 @@ class SkinTone(enum.StrEnum):
     VI = "VI"
 
 
+class BurnLook(enum.StrEnum):
+    """How the burn looks, roughly following the clinical depth classes (appearance only: no crater implied)."""
+
+    mixed = "mixed"
+    """Red and pink with white mottling, tan patches, a few blisters and dark specks (the default)."""
+    superficial = "superficial"
+    """Pink to bright red, moist, many blisters, no white or eschar."""
+    deep_partial = "deep_partial"
+    """Mottled deep red and waxy white, fewer blisters."""
+    full_thickness = "full_thickness"
+    """Leathery white to tan with dark eschar, no blisters."""
+
+
 class PhantomSpec(Message):
     """Everything a phantom scene is rendered from; the same spec and seed give the same files."""
 
@@ -70,6 +83,8 @@ class PhantomSpec(Message):
     """Skin type of the body part."""
     healing: Annotated[float, msgspec.Meta(ge=0.0, le=1.0)] = 0.0
     """How far the burn's colour has moved toward healed pink (0 fresh, 1 nearly healed)."""
+    burn_look: BurnLook = BurnLook.mixed
+    """Colour and texture of the burn (training variety; the ground truth does not depend on it)."""
     exif: bool = True
     """Write EXIF FocalLength and FocalLengthIn35mmFilm into the JPEGs, as a phone does."""
     supersample: Annotated[float, msgspec.Meta(ge=1.0, le=3.0)] = 1.5

@@ -25,7 +25,7 @@ from processing.phantom.photo import write_jpeg
 from processing.phantom.surfaces import make_surface
 from processing.phantom.truth import cross_checks, fine_mesh, quadrature, size_burn
 from schemas.errors import InvalidInput
-from schemas.phantom import PHANTOM_FORMAT, PhantomShape, PhantomSpec, PhantomTruth
+from schemas.phantom import PHANTOM_FORMAT, BurnLook, PhantomShape, PhantomSpec, PhantomTruth
 from tests.conftest import REPO, SHARED
 
 SPEC = PhantomSpec(views=6, width=640, height=480, seed=7, depth_mm=2.5)
@@ -167,6 +167,19 @@ def test_the_same_seed_gives_the_same_files(scene, series):
         for path in sorted((scene / sub).iterdir()):
             assert path.read_bytes() == (day0 / sub / path.name).read_bytes(), path
     assert _truth(scene).cameras == _truth(day0).cameras
+
+
+def test_a_burn_look_changes_the_burns_colour_and_nothing_else(scene, tmp_path):
+    run(msgspec.structs.replace(SPEC, burn_look=BurnLook.full_thickness), tmp_path)
+    mask = np.asarray(Image.open(scene / "masks" / "view_000.png")) > 127
+    assert mask.sum() > 100
+    for sub in ("masks", "object_masks"):
+        assert (scene / sub / "view_000.png").read_bytes() == (tmp_path / sub / "view_000.png").read_bytes()
+    mixed = np.asarray(Image.open(scene / "images" / "view_000.jpg")).astype(float)
+    full = np.asarray(Image.open(tmp_path / "images" / "view_000.jpg")).astype(float)
+    assert np.abs(mixed - full)[mask].mean() > 10 * np.abs(mixed - full)[~mask].mean()
+    a, b = _truth(scene), _truth(tmp_path)
+    assert (a.burn_area_cm2, a.burn_perimeter_cm, a.volume_cm3) == (b.burn_area_cm2, b.burn_perimeter_cm, b.volume_cm3)
 
 
 def test_the_series_shrinks_the_burn_and_moves_the_limb_rigidly(series):

@@ -121,7 +121,7 @@ def prepare(spec: PhantomSpec) -> Limb:
 def render_session(spec: PhantomSpec, limb: Limb, burn: Burn, object_to_world: np.ndarray, session: int,
                    out_dir: Path, session_info: dict | None = None) -> tuple[Path, PhantomTruth]:  # fmt: skip
     started = time.perf_counter()
-    texture = skin.apply_burn(limb.skin, burn, spec.healing, stream(spec, Stream.burn_look))
+    texture = skin.apply_burn(limb.skin, burn, spec.healing, stream(spec, Stream.burn_look), spec.burn_look)
     scene = build_scene(limb.surface, burn, object_to_world, texture, limb.cloth, limb.marker_texture,
                         limb.marker_ids, limb.mesh_spacing_mm, stream(spec, Stream.placement, session))  # fmt: skip
     cameras = sample_cameras(scene, spec.views, spec.width, spec.height, spec.hfov_deg,
@@ -153,7 +153,7 @@ def render_session(spec: PhantomSpec, limb: Limb, burn: Burn, object_to_world: n
         surface_check["area_mm2"], figures.quadrature["area_mm2"])  # fmt: skip
     focal_mm, focal_35 = exif_focal(spec.width, spec.height, focal)
     info = {"spec": msgspec.to_builtins(spec), "surface": limb.surface.describe(), "burn": burn.describe(),
-            "appearance": skin.appearance(spec.tone, spec.healing), "lights": scene.lights.describe(),
+            "appearance": {**skin.appearance(spec.tone, spec.healing), "burn_look": spec.burn_look.value}, "lights": scene.lights.describe(),
             "drape": drape.describe(limb.cloth),
             "render": {"supersample": spec.supersample, "texture_texel_mm": limb.texel_mm,
                        "render_mesh_spacing_mm": limb.mesh_spacing_mm, "render_mesh_tris": len(scene.body.faces),

@@ -26,7 +26,7 @@ from processing.phantom.textures import (
     srgb_to_linear,
     texel_centres,
 )
-from schemas.phantom import SkinTone
+from schemas.phantom import BurnLook, SkinTone
 
 TONE_SRGB = {
     SkinTone.I: (0.96, 0.83, 0.75), SkinTone.II: (0.91, 0.74, 0.63), SkinTone.III: (0.82, 0.62, 0.50),
@@ -39,6 +39,13 @@ BURN_SRGB = {"deep_red": (0.66, 0.09, 0.09), "red": (0.85, 0.24, 0.23), "pink": 
              "healed": (0.90, 0.58, 0.56), "blister": (0.95, 0.92, 0.78)}  # fmt: skip
 EDGE_WIDTH_MM = 1.5
 """10-90 % width of the burn's colour edge."""
+LOOKS = {
+    # white, tan, blisters (relative density), eschar specks (relative density), deep red bias
+    BurnLook.mixed: (1.0, 1.0, 1.0, 1.0, 0.0),
+    BurnLook.superficial: (0.0, 0.0, 3.0, 0.1, -0.8),
+    BurnLook.deep_partial: (2.2, 0.4, 0.4, 0.8, 0.8),
+    BurnLook.full_thickness: (2.5, 2.5, 0.0, 4.0, 0.5),
+}
 HALO = 0.2
 HALO_MM = 4.0
 SKIN_SPECULAR = 0.035
@@ -93,7 +100,9 @@ def burn_alpha(burn: Burn, s: np.ndarray, theta: np.ndarray) -> np.ndarray:
     return sigmoid((1.0 - s) * burn.radius(theta) / w)
 
 
-def apply_burn(skin: ChartTexture, burn: Burn, healing: float, rng: np.random.Generator) -> ChartTexture:
+def apply_burn(
+    skin: ChartTexture, burn: Burn, healing: float, rng: np.random.Generator, look: BurnLook = BurnLook.mixed
+) -> ChartTexture:
     """A copy of the skin texture with the burn painted in (only texels near the burn are touched)."""
     image = skin.image.copy()
     t = skin.texel_mm
@@ -115,16 +124,21 @@ def apply_burn(skin: ChartTexture, burn: Burn, healing: float, rng: np.random.Ge
     n1, n2, n3, n4 = noise(6.0), noise(2.5), noise(1.0), noise(0.3)
     centre_bias = (1.0 - np.minimum(s, 1.0))[..., None]
     fresh = 1.0 - healing
-    c = col["red"] + (col["deep_red"] - col["red"]) * sigmoid(1.5 * n1)
-    c = c + (col["pink"] - c) * 0.8 * sigmoid(2.5 * (n2 - 0.2))
-    c = c + (col["white"] - c) * fresh * sigmoid(5.0 * (0.7 * n3 + 0.5 * n1 - 1.0 + 0.8 * centre_bias))
-    c = c + (col["tan"] - c) * fresh * sigmoid(6.0 * (-0.8 * n2 + 0.4 * n3 - 1.3 + 0.5 * centre_bias))
-    n_blisters = int(0.6 * (r1 - r0) * (c1 - c0) * t * t / 100)
+    white_w, tan_w, blister_w, eschar_w, red_bias = LOOKS[look]
+    c = col["red"] + (col["deep_red"] - col["red"]) * sigmoid(1.5 * n1 + 2.0 * red_bias)
+    c = c + (col["pink"] - c) * 0.8 * sigmoid(2.5 * (n2 - 0.2) - 2.0 * red_bias)
+    c = c + (col["white"] - c) * min(white_w, 1.0) * fresh * sigmoid(
+        5.0 * (0.7 * n3 + 0.5 * n1 - 1.0 + 0.8 * centre_bias) + 2.0 * (white_w - 1.0)
+    )
+    c = c + (col["tan"] - c) * min(tan_w, 1.0) * fresh * sigmoid(
+        6.0 * (-0.8 * n2 + 0.4 * n3 - 1.3 + 0.5 * centre_bias) + 2.0 * (tan_w - 1.0)
+    )
+    n_blisters = int(0.6 * blister_w * (r1 - r0) * (c1 - c0) * t * t / 100)
     blisters = draw_dots(shape, rng.uniform([0, 0], [shape[1], shape[0]], (n_blisters, 2)),
                          rng.uniform(0.6, 2.2, n_blisters) * mm, rng.uniform(0.4, 0.8, n_blisters))[..., None]  # fmt: skip
     blisters *= fresh
     c = c + (col["blister"] - c) * blisters
-    n_specks = int(4.0 * (r1 - r0) * (c1 - c0) * t * t / 100)
+    n_specks = int(4.0 * eschar_w * (r1 - r0) * (c1 - c0) * t * t / 100)
     specks = draw_dots(shape, rng.uniform([0, 0], [shape[1], shape[0]], (n_specks, 2)),
                        rng.uniform(0.12, 0.35, n_specks) * mm, rng.uniform(0.5, 0.9, n_specks))[..., None]  # fmt: skip
     c = c + (col["eschar"] - c) * specks * (0.3 + 0.7 * fresh)
