@@ -1,0 +1,1 @@
+"""Burn measurement on a metric mesh: per-view probabilities carried onto the surface, fused, measured."""
