@@ -1,0 +1,69 @@
+"""Burn segmentation time per view on one core, next to reading the same photo.
+
+    .venv/bin/python -m benchmarks.segmentation_speed [--photos DIR] [--repeat 3]
+
+Goal (issue 5): <= 50 ms per view on one core for the model on a view resized to its input.
+The process is pinned to one CPU and onnxruntime to one thread. Same-run baseline: decoding the
+photo (cv2.imread), which every analysis pays anyway. Default photos: the FUSeg wound photos
+(512 x 512) and the shared p1 phantom views (1920 x 1440, the model sees a crop around the burn).
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime as dt
+import json
+import os
+import platform
+import statistics
+import time
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from processing.segmentation.infer import SHIPPED_MODEL, Box, BurnSegmenter
+
+SHARED = Path(__file__).resolve().parents[2] / "shared"
+
+
+def timed(fn, repeat: int) -> float:
+    best = []
+    for _ in range(repeat):
+        start = time.perf_counter()
+        fn()
+        best.append(time.perf_counter() - start)
+    return min(best) * 1000
+
+
+def measure(photos: list[Path], segmenter: BurnSegmenter, repeat: int, crop: bool) -> dict:
+    read_ms, model_ms = [], []
+    for photo in photos:
+        read_ms.append(timed(lambda p=photo: cv2.imread(str(p)), repeat))
+        rgb = cv2.cvtColor(cv2.imread(str(photo)), cv2.COLOR_BGR2RGB)
+        h, w = rgb.shape[:2]
+        box = Box.around(w / 2, h / 2, min(h, w) / 3, w, h) if crop else None
+        model_ms.append(timed(lambda r=rgb, b=box: segmenter.probability(r, b), repeat))
+    read, model = statistics.median(read_ms), statistics.median(model_ms)
+    return {"photos": len(photos), "size": f"{w}x{h}", "view": "crop" if crop else "whole picture",
+            "model_ms_median": round(model, 1), "model_ms_p90": round(float(np.percentile(model_ms, 90)), 1),
+            "read_photo_ms_median": round(read, 1), "model_over_read": round(model / read, 2)}  # fmt: skip
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--count", type=int, default=40, help="photos per set")
+    args = parser.parse_args()
+    os.sched_setaffinity(0, {min(os.sched_getaffinity(0))})
+    segmenter = BurnSegmenter(SHIPPED_MODEL, threads=1)
+    sets = [(sorted((SHARED / "datasets" / "fuseg2021-train" / "images").glob("*.jpg"))[: args.count], False),
+            (sorted((SHARED / "phantoms" / "p1_forearm" / "images").glob("*.jpg"))[: args.count], True)]  # fmt: skip
+    rows = [measure(photos, segmenter, args.repeat, crop) for photos, crop in sets if photos]
+    report = {"date": dt.date.today().isoformat(), "machine": f"{platform.processor() or platform.machine()}, "
+              "pinned to 1 core", "model_input": segmenter.input_size, "rows": rows}  # fmt: skip
+    print(json.dumps(report, indent=2))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,1 @@
+"""Burn segmentation: the network, its training data and training, and ONNX inference on the CPU."""

@@ -1,0 +1,134 @@
+"""Training data for the burn segmentation model: real wound photos and rendered phantom burns.
+
+Real: FUSeg 2021 foot-ulcer photos with wound masks (../shared/datasets/fuseg2021-train). The
+validation split is chosen by a hash of the file name, so it never changes and is never trained on.
+Synthetic: phantom scenes rendered by `processing.phantom` across skin types, burn looks, body parts,
+healing and crater depth; every fifth scene is held out whole (no view of it is trained on).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import logging
+from dataclasses import dataclass
+from pathlib import Path
+
+import cv2
+import msgspec
+import numpy as np
+
+from processing.phantom.generate import run as render_phantom
+from schemas.errors import InvalidInput
+from schemas.phantom import BurnLook, PhantomShape, PhantomSpec, SkinTone
+from schemas.segmentation import TrainingConfig
+
+log = logging.getLogger(__name__)
+
+TONES = list(SkinTone)
+LOOKS = list(BurnLook)
+SHAPES = list(PhantomShape)
+
+
+@dataclass(frozen=True)
+class Sample:
+    """One training or validation image with its burn mask (uint8 RGB, uint8 0/1)."""
+
+    rgb: np.ndarray
+    mask: np.ndarray
+    group: str
+    """'real', or the skin type of a phantom crop."""
+    name: str
+
+
+def is_validation(name: str, percent: int) -> bool:
+    return int(hashlib.sha256(name.encode()).hexdigest()[:8], 16) % 100 < percent
+
+
+def read_rgb(path: Path) -> np.ndarray:
+    image = cv2.imread(str(path), cv2.IMREAD_COLOR | cv2.IMREAD_IGNORE_ORIENTATION)
+    if image is None:
+        raise InvalidInput(f"{path}: not a readable image")
+    return cv2.cvtColor(image, cv2.COLOR_BGR2RGB)
+
+
+def read_mask(path: Path) -> np.ndarray:
+    mask = cv2.imread(str(path), cv2.IMREAD_GRAYSCALE)
+    if mask is None:
+        raise InvalidInput(f"{path}: not a readable mask")
+    return (mask >= 128).astype(np.uint8)
+
+
+def real_samples(root: Path, percent: int) -> tuple[list[Sample], list[Sample]]:
+    """(train, validation) from a folder with images/ and masks/ of the same stems."""
+    images = sorted((root / "images").glob("*.jpg")) + sorted((root / "images").glob("*.png"))
+    if not images:
+        raise InvalidInput(f"{root}: no images/ with .jpg or .png photos; is the dataset there?")
+    train, val = [], []
+    for image in images:
+        mask = root / "masks" / f"{image.stem}.png"
+        if not mask.exists():
+            raise InvalidInput(f"{image}: no mask {mask}")
+        sample = Sample(read_rgb(image), read_mask(mask), "real", image.name)
+        (val if is_validation(image.name, percent) else train).append(sample)
+    return train, val
+
+
+def phantom_spec(index: int, conf: TrainingConfig) -> PhantomSpec:
+    """The index-th training scene: tones and looks come round in turn, the body part is drawn at random."""
+    rng = np.random.default_rng([conf.seed, index])
+    return PhantomSpec(
+        shape=SHAPES[int(rng.integers(0, len(SHAPES)))], seed=int(rng.integers(1, 2**31)), views=conf.synthetic_views,
+        width=640, height=480, supersample=1.0, tone=TONES[index % len(TONES)],
+        burn_look=LOOKS[(index // len(TONES)) % len(LOOKS)], area_cm2=float(rng.uniform(3.0, 30.0)),
+        depth_mm=float(rng.choice([0.0, rng.uniform(0.5, 4.0)])), healing=float(rng.choice([0.0, rng.uniform(0.0, 0.6)])),
+        distance_min_mm=150.0, distance_max_mm=300.0, jpeg_quality=int(rng.integers(70, 95)),
+    )  # fmt: skip
+
+
+def render_scenes(conf: TrainingConfig, cache: Path) -> list[tuple[Path, PhantomSpec]]:
+    """Renders the training scenes into cache/ (scenes already there are kept)."""
+    scenes = []
+    for index in range(conf.synthetic_scenes):
+        spec = phantom_spec(index, conf)
+        digest = hashlib.sha256(msgspec.json.encode(spec)).hexdigest()[:10]
+        folder = cache / f"scene_{index:03d}_{digest}"
+        if not (folder / "ground_truth.json").exists():
+            log.info("rendering phantom %d/%d (%s, tone %s, %s)", index + 1, conf.synthetic_scenes, spec.shape,
+                     spec.tone, spec.burn_look)  # fmt: skip
+            render_phantom(spec, folder)
+        scenes.append((folder, spec))
+    return scenes
+
+
+def burn_crops(rgb: np.ndarray, mask: np.ndarray, rng: np.random.Generator, count: int, size: int):
+    """Square crops around the burn, from tight (burn fills most of it) to loose, resized to size."""
+    ys, xs = np.nonzero(mask)
+    h, w = mask.shape
+    if len(ys) < 20:
+        return
+    extent = max(ys.max() - ys.min(), xs.max() - xs.min()) + 1
+    for _ in range(count):
+        side = int(np.clip(extent / rng.uniform(0.25, 0.85), 32, min(h, w)))
+        cy = (ys.min() + ys.max()) / 2 + rng.uniform(-0.2, 0.2) * side
+        cx = (xs.min() + xs.max()) / 2 + rng.uniform(-0.2, 0.2) * side
+        y0 = int(np.clip(cy - side / 2, 0, h - side))
+        x0 = int(np.clip(cx - side / 2, 0, w - side))
+        crop = rgb[y0 : y0 + side, x0 : x0 + side]
+        crop_mask = mask[y0 : y0 + side, x0 : x0 + side]
+        yield (cv2.resize(crop, (size, size), interpolation=cv2.INTER_AREA),
+               cv2.resize(crop_mask, (size, size), interpolation=cv2.INTER_NEAREST))  # fmt: skip
+
+
+def synthetic_samples(scenes: list[tuple[Path, PhantomSpec]], conf: TrainingConfig, crops_per_view: int = 3):
+    """(train, validation) crops around each view's burn; a held-out scene gives only validation crops."""
+    train, val = [], []
+    size = conf.input_size * 2  # kept at twice the input so augmentation can rescale
+    for index, (folder, spec) in enumerate(scenes):
+        rng = np.random.default_rng([conf.seed, 7, index])
+        held_out = index % 5 == 0
+        for image in sorted((folder / "images").glob("*.jpg")):
+            rgb, mask = read_rgb(image), read_mask(folder / "masks" / f"{image.stem}.png")
+            for k, (crop, crop_mask) in enumerate(burn_crops(rgb, mask, rng, 1 if held_out else crops_per_view, size)):
+                sample = Sample(crop, crop_mask, spec.tone.value, f"{folder.name}/{image.stem}#{k}")
+                (val if held_out else train).append(sample)
+    return train, val
