@@ -11,6 +11,7 @@ from pathlib import Path
 
 import msgspec
 
+from gateway import cli_analysis
 from schemas.config import Config, load_config
 from schemas.errors import AuthenticationFailed, BurnedgeError, Conflict, InvalidInput, NotFound
 
@@ -142,28 +143,13 @@ def cmd_frames(args: argparse.Namespace) -> int:
 
 
 def cmd_reconstruct(args: argparse.Namespace) -> int:
-    import shutil
-
     from processing.reconstruction.pipeline import run
-    from schemas.reconstruction import Outcome, RulerPoints
+    from schemas.reconstruction import Outcome
 
     config = _config(args)
-    ruler = None
-    if args.ruler:
-        try:
-            ruler = msgspec.json.decode(Path(args.ruler).read_bytes(), type=RulerPoints)
-        except FileNotFoundError as exc:
-            raise NotFound(f"no ruler file {args.ruler}") from exc
-        except (msgspec.ValidationError, msgspec.DecodeError) as exc:
-            raise InvalidInput(f"ruler file {args.ruler}: {exc}") from exc
-    out, source = Path(args.out).resolve(), Path(args.source).resolve()
-    if out == source or out in source.parents or source in out.parents:
-        raise InvalidInput(f"--out {args.out} overlaps the pictures in {args.source}; choose a separate folder")
-    if args.fresh and out.exists():
-        if any(out.iterdir()) and not ((out / "inputs.json").exists() or (out / "report.json").exists()):
-            raise InvalidInput(f"--fresh: {args.out} does not look like an analysis folder; not deleting it")
-        shutil.rmtree(out)
-    report = run(config, Path(args.source), out, ruler, gate=not args.no_gate)
+    ruler = cli_analysis.read_ruler(args.ruler)
+    out, source = cli_analysis.prepare_out(args.source, args.out, args.fresh)
+    report = run(config, source, out, ruler, gate=not args.no_gate)
     print(msgspec.json.format(msgspec.json.encode(report), indent=2).decode())
     if report.outcome is Outcome.failed:
         log.error("analysis failed: %s", report.reason)
@@ -176,7 +162,8 @@ def cmd_phantom(args: argparse.Namespace) -> int:
     from schemas.phantom import PhantomSpec
 
     given = {"shape": args.shape, "views": args.views, "width": args.width, "height": args.height, "seed": args.seed,
-             "area_cm2": args.area_cm2, "depth_mm": args.depth_mm, "tone": args.tone}  # fmt: skip
+             "area_cm2": args.area_cm2, "depth_mm": args.depth_mm, "tone": args.tone,
+             "burn_look": args.burn_look}  # fmt: skip
     try:
         spec = msgspec.convert({k: v for k, v in given.items() if v is not None} | {"exif": not args.no_exif},
                                PhantomSpec)  # fmt: skip
@@ -223,6 +210,8 @@ def build_parser() -> argparse.ArgumentParser:
                      help="use every decodable picture, even those the burn-photo quality gate rejects")  # fmt: skip
     rec.set_defaults(func=cmd_reconstruct)
 
+    cli_analysis.add_commands(sub, _config)
+
     phantom = sub.add_parser("phantom", help="render a burn phantom: multi-view photos with exact ground truth")
     phantom.add_argument("--out", required=True, metavar="DIR", help="folder for images/, masks/, ground_truth.json")
     phantom.add_argument("--shape", choices=["forearm", "patch", "foot"], help="body part (default forearm)")
@@ -233,6 +222,8 @@ def build_parser() -> argparse.ArgumentParser:
     phantom.add_argument("--area-cm2", type=float, help="burn area, 1-40 cm2 (default 14)")
     phantom.add_argument("--depth-mm", type=float, help="crater depth, 0-8 mm; 0 is a flat burn (default 2)")
     phantom.add_argument("--tone", choices=["I", "II", "III", "IV", "V", "VI"], help="skin type (default III)")
+    phantom.add_argument("--burn-look", choices=["mixed", "superficial", "deep_partial", "full_thickness"],
+                         help="colour and texture of the burn (default mixed)")  # fmt: skip
     phantom.add_argument("--series", action="store_true", help="four sessions (days 0, 7, 14, 21) of a healing burn")
     phantom.add_argument("--no-exif", action="store_true", help="leave the focal length out of the JPEGs' EXIF")
     phantom.set_defaults(func=cmd_phantom)

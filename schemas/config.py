@@ -227,6 +227,34 @@ class ReconstructionConfig(Message):
     """Surface parts supported by the fewest points (this share) are trimmed away."""
 
 
+class AnalysisConfig(Message):
+    """Burn segmentation, carrying it onto the surface, and the burn metrics."""
+
+    model: str = ""
+    """ONNX segmentation model; empty uses the one shipped with burnedge (see docs/segmentation-model.md)."""
+    threads: Annotated[int, msgspec.Meta(ge=1, le=64)] = 1
+    """CPU threads the model may use per picture (the gateway's other work keeps the second core)."""
+    crop_radius_mm: Annotated[float, msgspec.Meta(gt=0)] = 45.0
+    """The model looks at a square of this half-side around the point the cameras aim at (the burn), as it was
+    trained; `burnedge segment` on loose photos shows it the whole picture."""
+    fusion_rule: Literal["log_odds", "weighted_mean", "noisy_or"] = "log_odds"
+    """How views' probabilities are combined per surface point (benchmarks/analysis_accuracy.py compares them)."""
+    min_views_for_confidence: Annotated[int, msgspec.Meta(ge=1)] = 3
+    """A burn surface point is well observed when at least this many pictures see it."""
+    ring_inner_mm: Annotated[float, msgspec.Meta(ge=0)] = 3.0
+    """Healthy-skin ring for the relief reference starts this far outside the burn edge..."""
+    ring_outer_mm: Annotated[float, msgspec.Meta(gt=0)] = 15.0
+    """...and ends this far outside it."""
+    provisional_hours: Annotated[float, msgspec.Meta(ge=0)] = 72.0
+    """Results from pictures taken sooner than this after the injury are marked provisional (burns evolve)."""
+
+    def __post_init__(self) -> None:
+        if self.ring_inner_mm >= self.ring_outer_mm:
+            raise msgspec.ValidationError(
+                f"ring_inner_mm ({self.ring_inner_mm}) must be less than ring_outer_mm ({self.ring_outer_mm})"
+            )
+
+
 class Config(Message):
     gateway: GatewayConfig = msgspec.field(default_factory=GatewayConfig)
     """The HTTP gateway and its database."""
@@ -244,6 +272,8 @@ class Config(Message):
     """When a capture set is ready for 3D analysis."""
     reconstruction: ReconstructionConfig = msgspec.field(default_factory=ReconstructionConfig)
     """SfM, metric scale, multi-view stereo and meshing."""
+    analysis: AnalysisConfig = msgspec.field(default_factory=AnalysisConfig)
+    """Burn segmentation, mapping onto the surface, and metrics."""
 
 
 def load_config(path: str | Path | None = None, environ: dict[str, str] | None = None) -> Config:
@@ -259,7 +289,8 @@ def load_config(path: str | Path | None = None, environ: dict[str, str] | None =
     env = os.environ if environ is None else environ
     sections = (("gateway", GatewayConfig), ("security", SecurityConfig), ("clinical", ClinicalConfig),
                 ("quality", QualityGateConfig), ("uploads", UploadConfig), ("frames", FramesConfig),
-                ("readiness", ReadinessConfig), ("reconstruction", ReconstructionConfig))  # fmt: skip
+                ("readiness", ReadinessConfig), ("reconstruction", ReconstructionConfig),
+                ("analysis", AnalysisConfig))  # fmt: skip
     for section, struct in sections:
         defaults = struct()
         for field in struct.__struct_fields__:

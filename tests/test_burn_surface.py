@@ -300,3 +300,15 @@ def test_bad_input_is_refused_with_a_reason(views):
         projection.sample_views(mesh.vertices + [0, 0, 1000.0], mesh.faces, views[:1], [np.zeros((480, 640))])
     with pytest.raises(InvalidInput, match="no edge"):
         relief.fit_reference(mesh.vertices, mesh.faces, np.zeros(len(mesh.vertices)), np.array([0.0, 0.0, 1.0]))
+
+
+def test_specks_apart_from_the_burn_are_set_aside_but_a_satellite_burn_counts():
+    from processing.analysis.surface_map import stray_regions
+
+    mesh = ss.sheet(half=30.0, step=1.0)
+    x, y = mesh.vertices[:, 0], mesh.vertices[:, 1]
+    main, speck, satellite = np.hypot(x, y) < 10, np.hypot(x - 22, y - 22) < 2, np.hypot(x + 20, y - 20) < 6
+    q = np.where(main | speck | satellite, 0.9, 0.1)
+    stray = stray_regions(mesh.vertices, mesh.faces, q)
+    np.testing.assert_array_equal(stray, speck)
+    assert not stray_regions(mesh.vertices, mesh.faces, np.zeros(len(q))).any()

@@ -27,6 +27,7 @@ from schemas.errors import CaptureInsufficient
 from schemas.phantom import PhantomShape, PhantomSpec
 from schemas.reconstruction import FailureCode, Outcome, ReconstructionReport, RulerMark, RulerPoints, ScaleSource
 from tests.conftest import REPO, SHARED
+from tests.phantom_helpers import hide_marker
 
 SMALL = {"views": 8, "width": 960, "height": 720}
 
@@ -93,23 +94,6 @@ def test_a_finished_analysis_resumes_without_redoing_work(phantom, analysis, tmp
     assert third.dense.mesh_faces == pytest.approx(report.dense.mesh_faces, rel=1e-3)
 
 
-def _hide_marker(phantom: Path, images: Path) -> None:
-    """Paint over the marker strip in every picture, as if none had been laid down."""
-    truth = json.loads((phantom / "ground_truth.json").read_text())
-    corners = np.vstack([np.array(c) for c in truth["marker"]["corners_world_mm"].values()])
-    centre = corners.mean(axis=0)
-    strip = centre + (corners - centre) * 1.6
-    for camera in truth["cameras"]:
-        path = images / f"{camera['name']}.jpg"
-        if not path.exists():
-            continue  # left out by the quality gate
-        image = cv2.imread(str(path))
-        cam = strip @ np.array(camera["R"]).T + np.array(camera["t"])
-        uv = cam[:, :2] / cam[:, 2:] @ np.array(camera["K"])[:2, :2].T + np.array(camera["K"])[:2, 2]
-        cv2.fillConvexPoly(image, cv2.convexHull(uv.astype(np.int32)), (90, 110, 140))
-        cv2.imwrite(str(path), image, [cv2.IMWRITE_JPEG_QUALITY, 95])
-
-
 @pytest.fixture
 def unmarked(phantom, analysis, tmp_path) -> Path:
     """The analysis up to SfM, with the marker painted out of its pictures."""
@@ -121,7 +105,7 @@ def unmarked(phantom, analysis, tmp_path) -> Path:
     for image in (copy / "images").iterdir():
         image.unlink()
         shutil.copy(phantom / "images" / image.name, image)
-    _hide_marker(phantom, copy / "images")
+    hide_marker(phantom, copy / "images")
     return copy
 
 

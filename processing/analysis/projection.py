@@ -65,7 +65,9 @@ def sample_view(
 ) -> ViewSample:  # fmt: skip
     """Probability, weight and visibility of every vertex in one view.
 
-    prob is the view's burn probability map (height, width) in [0, 1], in the undistorted picture (same K).
+    prob is the view's burn probability map (height, width) in [0, 1], in the undistorted picture (same K);
+    NaN marks pixels nobody looked at (outside the model's crop, outside the sensor after undistortion): a
+    vertex landing there is not seen by this view, rather than seen as healthy.
     Pass `scene` from build_scene when sampling several views of one mesh.
     """
     vertices, faces = check_mesh(vertices, faces)
@@ -88,6 +90,9 @@ def sample_view(
     )
     p = np.zeros(len(vertices))
     p[seen] = bilinear(prob, uv[seen])
+    looked_at = np.isfinite(p)
+    seen &= looked_at
+    p[~looked_at] = 0.0
     return ViewSample(p=p, weight=np.where(seen, cos, 0.0), seen=seen)
 
 
@@ -137,6 +142,7 @@ def _check_prob(prob: np.ndarray, view: View) -> np.ndarray:
     if prob.shape != (view.height, view.width):
         raise InvalidInput(f"probability map for view {view.name} has shape {prob.shape}, expected "
                            f"({view.height}, {view.width}) (height, width) like the picture")  # fmt: skip
-    if not np.all(np.isfinite(prob)) or prob.min() < 0 or prob.max() > 1:
-        raise InvalidInput(f"probability map for view {view.name} must hold finite values in [0, 1]")
+    known = prob[np.isfinite(prob)]
+    if np.isinf(prob).any() or (known.size and (known.min() < 0 or known.max() > 1)):
+        raise InvalidInput(f"probability map for view {view.name} must hold values in [0, 1] (NaN: not looked at)")
     return prob

@@ -161,7 +161,16 @@ def _scale(path: Path):
 
 def software_versions() -> dict[str, str]:
     versions = {}
-    for package in ("burnedge", "pycolmap", "open3d", "opencv-python-headless", "numpy", "scipy", "trimesh"):
+    for package in (
+        "burnedge",
+        "pycolmap",
+        "open3d",
+        "opencv-python-headless",
+        "onnxruntime",
+        "numpy",
+        "scipy",
+        "trimesh",
+    ):
         try:
             versions[package] = metadata.version(package)
         except metadata.PackageNotFoundError:

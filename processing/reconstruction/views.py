@@ -65,8 +65,9 @@ class View:
         pts = cv2.undistortPoints(np.asarray(pixels, np.float64).reshape(-1, 1, 2), self.K, self.dist, P=self.K)
         return pts.reshape(-1, 2)
 
-    def undistort_image(self, image: np.ndarray) -> np.ndarray:
-        """The picture as a distortion-free pinhole camera with the same K."""
+    def undistort_image(self, image: np.ndarray, outside: float | None = None) -> np.ndarray:
+        """The picture as a distortion-free pinhole camera with the same K. Pixels that fall outside the
+        sensor repeat its edge, or take the value `outside` when one is given (e.g. NaN: unknown)."""
         if not np.any(self.dist):
             return image
         if "full" not in self._maps:
@@ -74,7 +75,18 @@ class View:
                 self.K, self.dist, None, self.K, (self.width, self.height), cv2.CV_32FC1
             )
         mx, my = self._maps["full"]
-        return cv2.remap(image, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+        if outside is None:
+            return cv2.remap(image, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+        return cv2.remap(image, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=outside)
+
+    def distort_points(self, pixels: np.ndarray) -> np.ndarray:
+        """Undistorted (pinhole) pixel positions -> where they lie in the picture as taken."""
+        if not np.any(self.dist):
+            return np.asarray(pixels, dtype=np.float64)
+        rays = cv2.undistortPoints(np.asarray(pixels, np.float64).reshape(-1, 1, 2), self.K, None)
+        rays = np.concatenate([rays.reshape(-1, 2), np.ones((len(rays), 1))], axis=1)
+        pts, _ = cv2.projectPoints(rays, np.zeros(3), np.zeros(3), self.K, self.dist)
+        return pts.reshape(-1, 2)
 
 
 def camera_intrinsics(camera: pycolmap.Camera) -> tuple[np.ndarray, np.ndarray]:

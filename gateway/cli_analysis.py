@@ -1,0 +1,158 @@
+"""The analysis commands of the CLI: segment, analyze, train-segmentation."""
+
+from __future__ import annotations
+
+import argparse
+import logging
+from collections.abc import Callable
+from pathlib import Path
+
+import msgspec
+
+from schemas.config import Config
+from schemas.errors import InvalidInput, NotFound
+
+log = logging.getLogger("burnedge")
+
+IMAGE_SUFFIXES = {".jpg", ".jpeg", ".png", ".heic", ".heif"}
+
+
+def read_ruler(path: str | None):
+    """The ruler points file given on the command line, or None when none was given."""
+    from schemas.reconstruction import RulerPoints
+
+    if not path:
+        return None
+    try:
+        return msgspec.json.decode(Path(path).read_bytes(), type=RulerPoints)
+    except FileNotFoundError as exc:
+        raise NotFound(f"no ruler file {path}") from exc
+    except (msgspec.ValidationError, msgspec.DecodeError) as exc:
+        raise InvalidInput(f"ruler file {path}: {exc}") from exc
+
+
+def prepare_out(source_arg: str, out_arg: str, fresh: bool) -> tuple[Path, Path]:
+    """(out, source) resolved; refuses an analysis folder inside the pictures; --fresh empties an old one."""
+    import shutil
+
+    out, source = Path(out_arg).resolve(), Path(source_arg).resolve()
+    if out == source or out in source.parents or source in out.parents:
+        raise InvalidInput(f"--out {out_arg} overlaps the pictures in {source_arg}; choose a separate folder")
+    if fresh and out.exists():
+        if any(out.iterdir()) and not ((out / "inputs.json").exists() or (out / "report.json").exists()):
+            raise InvalidInput(f"--fresh: {out_arg} does not look like an analysis folder; not deleting it")
+        shutil.rmtree(out)
+    return out, source
+
+
+def cmd_segment(args: argparse.Namespace, config: Config) -> int:
+    import cv2
+    import numpy as np
+
+    from processing.segmentation.infer import BurnSegmenter, read_rgb
+
+    if not Path(args.source).is_dir():
+        raise NotFound(f"{args.source} is not a folder of photos")
+    out, source = prepare_out(args.source, args.out, fresh=False)
+    photos = sorted(p for p in source.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES)
+    if not photos:
+        raise InvalidInput(f"{source} holds no JPEG, PNG or HEIC photos")
+    stems = [p.stem for p in photos]
+    if len(set(stems)) < len(stems):
+        twins = sorted({s for s in stems if stems.count(s) > 1})
+        raise InvalidInput(f"photos share a name but not a type ({', '.join(twins)}): their masks would overwrite "
+                           "each other; rename one of each")  # fmt: skip
+    out.mkdir(parents=True, exist_ok=True)
+    segmenter = BurnSegmenter(config.analysis.model, config.analysis.threads)
+    for i, photo in enumerate(photos, 1):
+        rgb = read_rgb(photo)
+        prob = segmenter.probability(rgb)
+        for name, image in ((f"{photo.stem}.png", np.where(prob >= 0.5, 255, 0).astype(np.uint8)),
+                            (f"{photo.stem}.probability.png", np.round(prob * 255).astype(np.uint8))):  # fmt: skip
+            tmp = out / f".{name}.tmp.png"
+            if not cv2.imwrite(str(tmp), image):
+                raise InvalidInput(f"could not write {out / name} (disk full or not writable?)")
+            tmp.replace(out / name)
+        log.info("[%d/%d] %s: burn in %.1f %% of the picture", i, len(photos), photo.name, 100 * (prob >= 0.5).mean())
+    return 0
+
+
+def cmd_analyze(args: argparse.Namespace, config: Config) -> int:
+    from processing.analysis.pipeline import Patient, run
+    from schemas.analysis import AnalysisStatus
+
+    if args.marker_mm is not None:
+        if not 0 < args.marker_mm <= 500:
+            raise InvalidInput(f"--marker-mm {args.marker_mm:g}: the printed marker's side must be in (0, 500] mm")
+        config = msgspec.structs.replace(
+            config, reconstruction=msgspec.structs.replace(config.reconstruction, marker_side_mm=args.marker_mm)
+        )
+    ruler = read_ruler(args.ruler)
+    masks = Path(args.masks) if args.masks else None
+    if masks is not None and not masks.is_dir():
+        raise NotFound(f"--masks {args.masks} is not a folder")
+    out, source = prepare_out(args.source, args.out, args.fresh)
+    patient = Patient(hours_since_injury=args.hours_since_injury, height_cm=args.height_cm, weight_kg=args.weight_kg)
+    result = run(config, source, out, masks=masks, ruler=ruler, patient=patient, gate=not args.no_gate)
+    print(msgspec.json.format(msgspec.json.encode(result), indent=2).decode())
+    if result.status is AnalysisStatus.failed:
+        log.error("analysis failed: %s", result.reason)
+        return 7
+    return 0
+
+
+def cmd_train_segmentation(args: argparse.Namespace, config: Config) -> int:
+    try:
+        from processing.segmentation.train import run
+    except ImportError as exc:
+        raise InvalidInput(f"training needs torch and onnx: pip install -e '.[train]' ({exc})") from exc
+    from schemas.segmentation import TrainingConfig
+
+    conf = TrainingConfig()
+    if args.recipe:
+        try:
+            conf = msgspec.json.decode(Path(args.recipe).read_bytes(), type=TrainingConfig)
+        except (OSError, msgspec.ValidationError, msgspec.DecodeError) as exc:
+            raise InvalidInput(f"training recipe {args.recipe}: {exc}") from exc
+    if args.epochs:
+        conf = msgspec.structs.replace(conf, epochs=args.epochs)
+    report = run(conf, Path(args.data), Path(args.out), Path(args.cache or Path(args.out) / "phantoms"))
+    print(report.read_text())
+    return 0
+
+
+def add_commands(sub, config_of: Callable[[argparse.Namespace], Config]) -> None:
+    """Registers the commands; each is called with its parsed arguments and the loaded configuration."""
+
+    def bind(func):
+        return lambda args: func(args, config_of(args))
+
+    seg = sub.add_parser("segment", help="the burn segmentation model alone: one PNG mask per photo")
+    seg.add_argument("source", metavar="DIR", help="folder of photos")
+    seg.add_argument("--out", required=True, metavar="OUT",
+                     help="folder for STEM.png (255 = burn) and STEM.probability.png")  # fmt: skip
+    seg.set_defaults(func=bind(cmd_segment))
+
+    ana = sub.add_parser("analyze", help="photos or a video -> burn area, perimeter, relief, volume (analysis.json)")
+    ana.add_argument("source", metavar="DIR", help="folder of photos, or a video (MP4, MOV)")
+    ana.add_argument("--out", required=True, metavar="OUT", help="analysis folder; an interrupted run resumes there")
+    ana.add_argument("--masks", metavar="DIR",
+                     help="a person's burn masks (STEM.png, white = burn) or outlines (STEM.json); they replace "
+                          "the model's for those pictures")  # fmt: skip
+    ana.add_argument("--marker-mm", type=float, help="printed side of each marker square in mm (default 20)")
+    ana.add_argument("--ruler", metavar="FILE", help="JSON with two ruler points marked in 2+ pictures (no marker)")
+    ana.add_argument("--hours-since-injury", type=float, help="before 72 h the result is marked provisional")
+    ana.add_argument("--height-cm", type=float, help="patient height, for %%TBSA of this burn")
+    ana.add_argument("--weight-kg", type=float, help="patient weight, for %%TBSA of this burn")
+    ana.add_argument("--fresh", action="store_true", help="discard what an earlier run left in OUT")
+    ana.add_argument("--no-gate", action="store_true", help="use every decodable picture, even rejected ones")
+    ana.set_defaults(func=bind(cmd_analyze))
+
+    train = sub.add_parser("train-segmentation", help="train the segmentation model on the CPU, export ONNX")
+    train.add_argument("--data", default="../shared/datasets/fuseg2021-train", metavar="DIR",
+                       help="wound photos with images/ and masks/ (default ../shared/datasets/fuseg2021-train)")  # fmt: skip
+    train.add_argument("--out", required=True, metavar="DIR", help="folder for burnseg.onnx and its training report")
+    train.add_argument("--cache", metavar="DIR", help="where the rendered training phantoms are kept (OUT/phantoms)")
+    train.add_argument("--recipe", metavar="FILE", help="JSON training recipe (see schemas/segmentation.py)")
+    train.add_argument("--epochs", type=int, help="override the recipe's number of epochs")
+    train.set_defaults(func=bind(cmd_train_segmentation))
