@@ -237,7 +237,7 @@ class AnalysisConfig(Message):
     crop_radius_mm: Annotated[float, msgspec.Meta(gt=0)] = 45.0
     """The model looks at a square of this half-side around the point the cameras aim at (the burn), as it was
     trained; `burnedge segment` on loose photos shows it the whole picture."""
-    fusion_rule: Literal["log_odds", "weighted_mean", "noisy_or"] = "log_odds"
+    fusion_rule: Literal["weighted_mean", "log_odds", "noisy_or"] = "weighted_mean"
     """How views' probabilities are combined per surface point (benchmarks/analysis_accuracy.py compares them)."""
     min_views_for_confidence: Annotated[int, msgspec.Meta(ge=1)] = 3
     """A burn surface point is well observed when at least this many pictures see it."""
