@@ -51,6 +51,11 @@ def level_offsets(q: np.ndarray, level: float = LEVEL) -> np.ndarray:
     return np.where(np.isfinite(q), q, 0.0) - level
 
 
+def mesh_edges(faces: np.ndarray) -> np.ndarray:
+    """The three edges of every face, (3F, 2) vertex pairs; an inner edge appears once from each side."""
+    return np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
+
+
 def triangle_areas(corners: np.ndarray) -> np.ndarray:
     """Areas of triangles given as (T, 3, 3) corner coordinates."""
     return 0.5 * np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1)

@@ -19,6 +19,7 @@ from processing.analysis.burn_region import (
     SMOOTHING_MM,
     boundary_loops,
     burn_area_mm2,
+    mesh_edges,
     per_face_burn_fraction,
     perimeter_mm,
     triangle_areas,
@@ -60,7 +61,7 @@ class Measurement(Frozen):
 def burn_at_edge(faces: np.ndarray, q: np.ndarray) -> bool:
     """Whether a burn vertex lies on the mesh border or next to a vertex no picture saw."""
     burn = np.nan_to_num(q) >= 0.5
-    edges = np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1)
+    edges = np.sort(mesh_edges(faces), axis=1)
     unique, counts = np.unique(edges, axis=0, return_counts=True)
     border = unique[counts == 1].ravel()
     if burn[border].any():

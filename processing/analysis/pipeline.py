@@ -15,7 +15,6 @@ from __future__ import annotations
 import hashlib
 import json
 import logging
-import time
 from collections.abc import Callable
 from pathlib import Path
 
@@ -25,7 +24,7 @@ import numpy as np
 from processing.analysis import confidence, measure, segment_views, surface_map
 from processing.clinical.bsa import mosteller
 from processing.reconstruction import pipeline as reconstruction
-from processing.reconstruction.artifacts import read_json, write_json
+from processing.reconstruction.artifacts import Stages, read_json, write_json
 from processing.reconstruction.dense import DenseInfo
 from processing.segmentation.infer import SHIPPED_MODEL
 from schemas.analysis import AnalysisResult, AnalysisStatus, ScaleSummary, SegmentationRecord
@@ -38,7 +37,6 @@ log = logging.getLogger(__name__)
 
 RESULT = "analysis.json"
 FINGERPRINTS = "analysis_fingerprints.json"
-STAGES = ("segment", "surface", "metrics")
 
 
 class Patient(msgspec.Struct, frozen=True, kw_only=True):
@@ -108,24 +106,11 @@ def run(config: Config, source: Path, out: Path, *, masks: Path | None = None, r
         return failed(report.reason, report.failure)
     p = {"segment": out / "segmentation" / segment_views.RECORD, "surface": out / "surface" / surface_map.ARRAYS,
          "metrics": out / "metrics" / measure.RESULT}  # fmt: skip
-    wanted = fingerprints(config, out, masks)
-    stored = json.loads((out / FINGERPRINTS).read_text()) if (out / FINGERPRINTS).exists() else {}
+    stages = Stages(out / FINGERPRINTS, p, fingerprints(config, out, masks))
 
     def stage(name: str, work: Callable[[], object]) -> None:
-        if p[name].exists() and stored.get(name) == wanted[name]:
-            timings[name] = 0.0
-            return
-        for later in STAGES[STAGES.index(name) :]:
-            p[later].unlink(missing_ok=True)
-            stored.pop(later, None)
-        write_json(out / FINGERPRINTS, stored)
-        p[name].parent.mkdir(parents=True, exist_ok=True)
-        start = time.perf_counter()
-        work()
-        stored[name] = wanted[name]
-        write_json(out / FINGERPRINTS, stored)
-        timings[name] = round(time.perf_counter() - start, 2)
-        log.info("stage %s done in %.1f s", name, timings[name])
+        stages.run(name, work)
+        timings[name] = stages.timings[-1].seconds
 
     paths = reconstruction.paths(out)
     mm_per_unit = report.scale.mm_per_unit if report.scale else None
@@ -136,9 +121,8 @@ def run(config: Config, source: Path, out: Path, *, masks: Path | None = None, r
         boxes = surface_map.crop_boxes(views, aim, config.analysis.crop_radius_mm * dense.units_per_mm)
         stage("segment", lambda: segment_views.run(config.analysis, paths["images"], [v.name for v in views],
                                                    p["segment"].parent, masks, boxes))  # fmt: skip
-        stage("surface", lambda: surface_map.run(config.analysis, paths["sfm_model"], paths["scale"],
-                                                 paths["mesh_ply"], p["segment"].parent, p["surface"].parent,
-                                                 aim, dense.roi_radii[0]))  # fmt: skip
+        stage("surface", lambda: surface_map.run(config.analysis, views, paths["mesh_ply"], p["segment"].parent,
+                                                 p["surface"].parent, aim, dense.roi_radii[0]))  # fmt: skip
         stage("metrics", lambda: measure.run(config.analysis, p["surface"], mm_per_unit, dense.units_per_mm, views,
                                              p["metrics"].parent))  # fmt: skip
     except CaptureInsufficient as exc:

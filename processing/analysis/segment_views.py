@@ -17,7 +17,7 @@ import msgspec
 import numpy as np
 
 from processing.reconstruction.artifacts import fresh_dir, publish_dir, write_json
-from processing.reconstruction.views import read_colour
+from processing.reconstruction.views import read_rgb
 from processing.segmentation.infer import Box, BurnSegmenter
 from schemas.analysis import SegmentationRecord, ViewMask
 from schemas.config import AnalysisConfig
@@ -109,7 +109,7 @@ def run(conf: AnalysisConfig, images_dir: Path, pictures: list[str], out_dir: Pa
     records, used = [], set()
     for name in pictures:
         stem = Path(name).stem
-        rgb = cv2.cvtColor(read_colour(images_dir / name), cv2.COLOR_BGR2RGB)
+        rgb = read_rgb(images_dir / name)
         person_stem = _given_stem(name, given)
         box = (boxes or {}).get(name)
         extra = {}

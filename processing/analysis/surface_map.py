@@ -1,6 +1,6 @@
 """Stage: carry each picture's burn probability onto the mesh and fuse the views per vertex.
 
-    run(conf, model_dir, scale_path, mesh_ply, seg_dir, out_dir) -> out_dir/burn_surface.npz
+    run(conf, views, mesh_ply, seg_dir, out_dir, aim, radius) -> out_dir/burn_surface.npz
 
 The npz holds the mesh (output frame), the fused probability `q` under the configured rule and
 under every other rule (for the comparison in benchmarks/analysis_accuracy.py), the number of
@@ -17,15 +17,15 @@ import cv2
 import msgspec
 import numpy as np
 import open3d as o3d
-import trimesh
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
 from processing.analysis import fusion, segment_views
-from processing.analysis.burn_region import triangle_areas
+from processing.analysis.burn_region import mesh_edges, triangle_areas
 from processing.analysis.projection import sample_views
 from processing.reconstruction.artifacts import read_json
 from processing.reconstruction.dense import to_output_frame
+from processing.reconstruction.mesh import write_glb
 from processing.reconstruction.views import View, load_views, read_model
 from processing.segmentation.infer import Box
 from schemas.analysis import SegmentationRecord, ViewMask
@@ -87,7 +87,7 @@ def stray_regions(vertices: np.ndarray, faces: np.ndarray, q: np.ndarray) -> np.
     burn = np.nan_to_num(q) >= 0.5
     if not burn.any():
         return np.zeros(len(q), bool)
-    edges = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
+    edges = mesh_edges(faces)
     edges = edges[burn[edges[:, 0]] & burn[edges[:, 1]]]
     graph = coo_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])), shape=(len(q), len(q)))
     _, label = connected_components(graph, directed=False)
@@ -97,16 +97,16 @@ def stray_regions(vertices: np.ndarray, faces: np.ndarray, q: np.ndarray) -> np.
     return burn & (area[label] < STRAY_SHARE * area.max())
 
 
-def run(conf: AnalysisConfig, model_dir: Path, scale_path: Path, mesh_ply: Path, seg_dir: Path, out_dir: Path,
-        aim: np.ndarray, radius: float) -> Path:  # fmt: skip
-    """`aim` and `radius` bound where the burn can be: the region around the point the cameras aim at. The
+def run(conf: AnalysisConfig, views: list[View], mesh_ply: Path, seg_dir: Path, out_dir: Path, aim: np.ndarray,
+        radius: float) -> Path:  # fmt: skip
+    """`views` are the placed cameras in the mesh's frame (output_views). `aim` and `radius` bound where the burn can be: the region around the point the cameras aim at. The
     mesh also covers the marker's surroundings (for the scale), where a false detection on the drape or the
     marker must not count as burn."""
     mesh = o3d.io.read_triangle_mesh(str(mesh_ply))
     vertices, faces = np.asarray(mesh.vertices, np.float64), np.asarray(mesh.triangles, np.int64)
     record = msgspec.json.decode((seg_dir / segment_views.RECORD).read_bytes(), type=SegmentationRecord)
     records = {r.image: r for r in record.views}
-    views = [v for v in output_views(model_dir, scale_path) if v.name in records]
+    views = [v for v in views if v.name in records]
     probs = [read_probability(seg_dir, records[v.name], v) for v in views]
     p, w = sample_views(vertices, faces, views, probs)
     fused = {rule.value: fusion.fuse(rule, p, w) for rule in fusion.FusionRule}
@@ -135,9 +135,4 @@ def run(conf: AnalysisConfig, model_dir: Path, scale_path: Path, mesh_ply: Path,
 def _write_painted(vertices, faces, colours, q, path: Path) -> None:
     base = np.clip(colours, 0, 1) if len(colours) else np.full((len(vertices), 3), 0.7)
     alpha = np.clip((np.nan_to_num(q) - 0.3) / 0.4, 0, 1)[:, None] * 0.8
-    painted = base * (1 - alpha) + PAINT * alpha
-    tri = trimesh.Trimesh(vertices=vertices, faces=faces, vertex_colors=(painted * 255).astype(np.uint8),
-                          process=False)  # fmt: skip
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_bytes(trimesh.exchange.gltf.export_glb(trimesh.Scene(tri)))
-    tmp.replace(path)
+    write_glb(vertices, faces, base * (1 - alpha) + PAINT * alpha, path)

@@ -51,7 +51,7 @@ def run(conf: ReconstructionConfig, dense_dir: Path, out_dir: Path) -> Path:
     tmp = out_dir / (PLY + ".tmp.ply")
     o3d.io.write_triangle_mesh(str(tmp), mesh, write_ascii=False)
     tmp.replace(out_dir / PLY)
-    _write_glb(mesh, out_dir / GLB)
+    write_glb(np.asarray(mesh.vertices), np.asarray(mesh.triangles), np.asarray(mesh.vertex_colors), out_dir / GLB)
     quality = DenseQuality(
         method="cpu-plane-sweep", units=info.units, roi_centre=[round(c, 3) for c in info.roi_centres[0]],
         roi_radius=round(info.roi_radii[0], 3), views_with_depth=info.views_with_depth,
@@ -74,12 +74,13 @@ def _largest_parts(mesh: o3d.geometry.TriangleMesh) -> o3d.geometry.TriangleMesh
     return mesh
 
 
-def _write_glb(mesh: o3d.geometry.TriangleMesh, path: Path) -> None:
-    colours = np.asarray(mesh.vertex_colors)
+def write_glb(vertices: np.ndarray, faces: np.ndarray, colours: np.ndarray | None, path: Path) -> Path:
+    """A glTF binary of the mesh with vertex colours (RGB in [0, 1], or None), written atomically."""
     tri = trimesh.Trimesh(
-        vertices=np.asarray(mesh.vertices), faces=np.asarray(mesh.triangles),
-        vertex_colors=(np.clip(colours, 0, 1) * 255).astype(np.uint8) if len(colours) else None, process=False,
+        vertices=vertices, faces=faces, process=False,
+        vertex_colors=(np.clip(colours, 0, 1) * 255).astype(np.uint8) if colours is not None and len(colours) else None,
     )  # fmt: skip
     tmp = path.with_name(path.name + ".tmp")
     tmp.write_bytes(trimesh.exchange.gltf.export_glb(trimesh.Scene(tri)))
     tmp.replace(path)
+    return path

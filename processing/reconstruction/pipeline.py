@@ -17,15 +17,13 @@ from __future__ import annotations
 import hashlib
 import json
 import logging
-import time
-from collections.abc import Callable
 from importlib import metadata
 from pathlib import Path
 
 import msgspec
 
 from processing.reconstruction import dense, inputs, mesh, scale, sfm
-from processing.reconstruction.artifacts import read_json, write_json
+from processing.reconstruction.artifacts import Stages, read_json, write_json
 from schemas.config import Config
 from schemas.errors import CaptureInsufficient, NotFound
 from schemas.reconstruction import (
@@ -96,24 +94,9 @@ def run(config: Config, source: Path, out: Path, ruler: RulerPoints | None = Non
     (out / REPORT).unlink(missing_ok=True)
     if not source.exists():
         raise NotFound(f"{source} does not exist")
-    wanted = fingerprints(config, source, ruler, gate)
-    stored = json.loads((out / FINGERPRINTS).read_text()) if (out / FINGERPRINTS).exists() else {}
-    timings: list[StageTiming] = []
-
-    def stage(name: str, work: Callable[[], object]) -> None:
-        if p[DONE[name]].exists() and stored.get(name) == wanted[name]:
-            timings.append(StageTiming(stage=name, seconds=0.0, resumed=True))
-            return
-        for later in STAGES[STAGES.index(name) :]:  # nothing downstream may outlive this stage's rerun
-            p[DONE[later]].unlink(missing_ok=True)
-            stored.pop(later, None)
-        write_json(out / FINGERPRINTS, stored)
-        start = time.perf_counter()
-        work()
-        stored[name] = wanted[name]
-        write_json(out / FINGERPRINTS, stored)
-        timings.append(StageTiming(stage=name, seconds=round(time.perf_counter() - start, 2)))
-        log.info("stage %s done in %.1f s", name, timings[-1].seconds)
+    stages = Stages(out / FINGERPRINTS, {name: p[DONE[name]] for name in STAGES},
+                    fingerprints(config, source, ruler, gate))  # fmt: skip
+    stage, timings = stages.run, stages.timings
 
     pictures: list[str] = []
     try:

@@ -135,3 +135,8 @@ def read_colour(path: Path) -> np.ndarray:
     if image is None:
         raise InvalidInput(f"{path.name} could not be decoded as an image")
     return image
+
+
+def read_rgb(path: Path) -> np.ndarray:
+    """The picture as stored (EXIF orientation not applied), RGB uint8."""
+    return cv2.cvtColor(read_colour(path), cv2.COLOR_BGR2RGB)

@@ -18,6 +18,7 @@ import msgspec
 import numpy as np
 
 from processing.phantom.generate import run as render_phantom
+from processing.reconstruction.views import read_rgb
 from schemas.errors import InvalidInput
 from schemas.phantom import BurnLook, PhantomShape, PhantomSpec, SkinTone
 from schemas.segmentation import TrainingConfig
@@ -42,13 +43,6 @@ class Sample:
 
 def is_validation(name: str, percent: int) -> bool:
     return int(hashlib.sha256(name.encode()).hexdigest()[:8], 16) % 100 < percent
-
-
-def read_rgb(path: Path) -> np.ndarray:
-    image = cv2.imread(str(path), cv2.IMREAD_COLOR | cv2.IMREAD_IGNORE_ORIENTATION)
-    if image is None:
-        raise InvalidInput(f"{path}: not a readable image")
-    return cv2.cvtColor(image, cv2.COLOR_BGR2RGB)
 
 
 def read_mask(path: Path) -> np.ndarray:
