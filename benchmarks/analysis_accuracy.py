@@ -9,8 +9,9 @@ goals (issue 5) area error median <= 2 % and worst <= 5 %, perimeter median <= 5
 within 0.5 mm of the crater depth, volume within 15 %. With --model the burn comes from the
 segmentation model instead (goal: area error median <= 8 %); the reconstruction is reused.
 
-Same-run baseline: the seed's rules, noisy-OR fusion and whole faces (a face counts when its
-centroid's probability is >= 0.5), measured on the same fused surfaces.
+Same-run baselines, measured on the same fused surfaces: the seed's rules, noisy-OR fusion and whole
+faces (a face counts when its centroid's probability is >= 0.5); and relief and volume against the quartic
+reference alone (without the ridged skin model).
 """
 
 from __future__ import annotations
@@ -26,9 +27,10 @@ from pathlib import Path
 
 import numpy as np
 
-from processing.analysis import burn_region
+from processing.analysis import burn_region, relief, surface_map
 from processing.analysis.pipeline import run as analyze
 from processing.phantom.generate import run as render_phantom
+from processing.reconstruction.pipeline import paths as reconstruction_paths
 from schemas.config import Config
 from schemas.phantom import PhantomShape, PhantomSpec, SkinTone
 
@@ -76,6 +78,17 @@ def rule_areas(out: Path) -> dict[str, float]:
     return areas
 
 
+def quartic_baseline(out: Path) -> tuple[float, float]:
+    """relief_max (mm) and volume (cm3) with the quartic reference alone on the same surface (before ridges)."""
+    data = np.load(out / "surface" / "burn_surface.npz")
+    v, f, q = data["vertices"], data["faces"], data["q"]
+    paths = reconstruction_paths(out)
+    views = surface_map.output_views(paths["sfm_model"], paths["scale"])
+    outward = relief.outward_from_views(views, v[np.nan_to_num(q) >= 0.5].mean(axis=0))
+    found = relief.relief(v, f, q, relief.fit_reference(v, f, q, outward, kind="quartic"))
+    return found.max_mm, found.volume_mm3 / 1000
+
+
 def row(name: str, scene: Path, work: Path, model: bool) -> dict:
     truth = json.loads((scene / "ground_truth.json").read_text())
     out = work / "analyses" / name
@@ -84,6 +97,7 @@ def row(name: str, scene: Path, work: Path, model: bool) -> dict:
         return {"scene": name, "status": result.status.value, "reason": result.reason}
     m = result.metrics
     areas = rule_areas(out)
+    quartic_relief, quartic_volume = quartic_baseline(out)
 
     def err(value: float, true: float) -> float:
         return round(100 * (value - true) / true, 2)
@@ -97,6 +111,10 @@ def row(name: str, scene: Path, work: Path, model: bool) -> dict:
         "volume_err_pct": err(m.volume_cm3, truth["volume_cm3"]) if truth["volume_cm3"] > 0.05 else None,
         "volume_cm3": m.volume_cm3, "true_volume_cm3": round(truth["volume_cm3"], 3),
         "confidence": result.confidence.score,
+        "relief_err_mm_quartic": round(quartic_relief - truth["max_depth_mm"], 2),
+        "volume_err_pct_quartic": err(quartic_volume, truth["volume_cm3"]) if truth["volume_cm3"] > 0.05 else None,
+        "reference": result.reference.kind if result.reference else None,
+        "reference_holdout_mm": result.reference.holdout_mm if result.reference else None,
         **{f"area_err_pct_{rule}": err(a, truth["burn_area_cm2"]) for rule, a in areas.items()},
         "seconds_segment_surface_metrics": round(sum(result.timings_s.get(s, 0) for s in
                                                      ("segment", "surface", "metrics")), 1),
@@ -111,7 +129,8 @@ def summary(rows: list[dict]) -> dict:
         return (round(statistics.median(values), 2), round(max(values), 2)) if values else (None, None)
 
     return {key: {"median_abs": med_abs(key)[0], "worst_abs": med_abs(key)[1]}
-            for key in ("area_err_pct", "perimeter_err_pct", "relief_err_mm", "volume_err_pct",
+            for key in ("area_err_pct", "perimeter_err_pct", "relief_err_mm", "volume_err_pct", "relief_err_mm_quartic",
+                        "volume_err_pct_quartic",
                         "area_err_pct_log_odds", "area_err_pct_weighted_mean", "area_err_pct_noisy_or",
                         "area_err_pct_seed_noisy_or_whole_faces")}  # fmt: skip
 

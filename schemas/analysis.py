@@ -114,10 +114,16 @@ class ReferenceRecord(Frozen):
     """The healthy-skin reference surface that surface relief is measured from."""
 
     kind: str
-    """'quartic', 'quadratic' or 'plane' (see docs/analysis.md for when each is used)."""
+    """'ridged', 'quartic', 'quadratic' or 'plane' (see docs/analysis.md for when each is used)."""
     ring_points: int
     ring_rms_mm: float | None = None
     """How far the healthy ring departs from the fitted reference (RMS), in mm when scaled."""
+    holdout_mm: float | None = None
+    """Median error of the reference predicting ring skin it was not fitted to (each eighth of the ring from the
+    rest), in mm when scaled: how well it can stand in for the skin under the burn. None when the ring is too
+    small to test."""
+    ridge_direction_deg: float | None = None
+    """For a ridged reference: the direction across the ridges in the reference's frame."""
 
 
 class AnalysisResult(Frozen):

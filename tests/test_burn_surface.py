@@ -231,23 +231,47 @@ def test_quadratic_reference_recovers_depth_on_curved_skin():
     assert relief.relief(mesh.vertices, mesh.faces, q, plane).max_mm < DEPTH - 1.0
 
 
-def test_quartic_reference_follows_a_round_limb_where_a_parabola_cannot():
+def test_quartic_and_ridged_references_follow_a_round_limb_where_a_parabola_cannot():
     # A forearm-like circular cylinder of radius 40 mm: over a ring reaching 35 mm from the burn centre a
-    # parabola misses the circle by tenths of a mm, which would bias the relief and the volume.
+    # parabola misses the circle by tenths of a mm, which would bias the relief and the volume. A quartic follows
+    # it; so does a ridged model (a cylinder is one long ridge), which "auto" may prefer.
     radius = 40.0
     mesh = ss.sheet(half=37.0, step=1.0,
                     height=lambda x, y: np.sqrt(radius**2 - x * x) - radius + ss.crater(DEPTH, CRATER_R, x, y))  # fmt: skip
     q = ss.disc_probability(mesh.chart_of, CRATER_R, EDGE_MM)(mesh.vertices)
     outward = np.array([0.0, 0.0, 1.0])
     auto = relief.fit_reference(mesh.vertices, mesh.faces, q, outward)
+    quartic = relief.fit_reference(mesh.vertices, mesh.faces, q, outward, kind="quartic")
     quadratic = relief.fit_reference(mesh.vertices, mesh.faces, q, outward, kind="quadratic")
-    assert auto.kind == "quartic" and auto.ring_rms_mm < quadratic.ring_rms_mm / 3
-    good, biased = (
+    assert auto.kind in ("quartic", "ridged") and quartic.ring_rms_mm < quadratic.ring_rms_mm / 3
+    biased = relief.relief(mesh.vertices, mesh.faces, q, quadratic)
+    for reference in (auto, quartic):
+        good = relief.relief(mesh.vertices, mesh.faces, q, reference)
+        assert good.max_mm == pytest.approx(DEPTH, abs=0.1)
+        assert abs(good.mean_mm - DEPTH / 3) < abs(biased.mean_mm - DEPTH / 3)
+
+
+def _ridges(x: np.ndarray, y: np.ndarray, angle_deg: float = 30.0) -> np.ndarray:
+    """Parallel ridges +-1 mm high, 12 mm apart, running at angle_deg to x (tendons over the back of a foot)."""
+    a = math.radians(angle_deg)
+    return np.sin(2 * math.pi * (-math.sin(a) * x + math.cos(a) * y) / 12.0 + 0.7)
+
+
+def test_ridged_reference_carries_ridges_under_the_burn_where_a_quartic_cannot():
+    mesh = ss.sheet(half=45.0, step=0.8, height=lambda x, y: _ridges(x, y) + ss.crater(DEPTH, CRATER_R, x, y))
+    q = ss.disc_probability(mesh.chart_of, CRATER_R, EDGE_MM)(mesh.vertices)
+    outward = np.array([0.0, 0.0, 1.0])
+    auto = relief.fit_reference(mesh.vertices, mesh.faces, q, outward)
+    quartic = relief.fit_reference(mesh.vertices, mesh.faces, q, outward, kind="quartic")
+    assert auto.kind == "ridged" and auto.holdout_mm < quartic.holdout_mm / 3
+    assert auto.ring_rms_mm < 0.05 < quartic.ring_rms_mm
+    found, wrong = (
         relief.relief(mesh.vertices, mesh.faces, q, auto),
-        relief.relief(mesh.vertices, mesh.faces, q, quadratic),
+        relief.relief(mesh.vertices, mesh.faces, q, quartic),
     )
-    assert good.max_mm == pytest.approx(DEPTH, abs=0.1)
-    assert abs(good.mean_mm - DEPTH / 3) < abs(biased.mean_mm - DEPTH / 3)
+    assert found.max_mm == pytest.approx(DEPTH, abs=0.2)
+    assert found.volume_mm3 == pytest.approx(math.pi * CRATER_R**2 * DEPTH / 3, rel=0.10)
+    assert abs(wrong.max_mm - DEPTH) > 0.5
 
 
 def _blister(x: np.ndarray, y: np.ndarray) -> np.ndarray:

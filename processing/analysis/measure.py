@@ -24,7 +24,7 @@ from processing.analysis.burn_region import (
     perimeter_mm,
     triangle_areas,
 )
-from processing.analysis.relief import fit_reference, outward_from_views, relief
+from processing.analysis.relief import UNCERTAIN_REFERENCE_MM, fit_reference, outward_from_views, relief
 from processing.reconstruction.artifacts import write_json
 from processing.reconstruction.views import View
 from schemas.analysis import BurnMetrics, ReferenceRecord
@@ -35,10 +35,6 @@ from schemas.errors import InvalidInput
 log = logging.getLogger(__name__)
 
 RESULT = "metrics.json"
-ROUGH_RING_MM = 0.2
-"""Healthy skin departing from the smooth reference by more than this (RMS) makes the relief uncertain: on the
-bumpy shared foot phantoms (0.5 mm) relief came out 0.7-1.6 mm too deep, on smooth limbs (<= 0.07 mm) within
-0.1 mm (docs/benchmarks.md)."""
 
 
 class Measurement(Frozen):
@@ -55,7 +51,7 @@ class Measurement(Frozen):
     """Burn reaches the border of the reconstructed surface or surface no picture saw: it may continue there."""
     perimeter_smoothing_mm: float
     relief_note: str = ""
-    """Why relief and volume are missing, when they are."""
+    """Why relief and volume are missing or uncertain, when they are."""
 
 
 def burn_at_edge(faces: np.ndarray, q: np.ndarray) -> bool:
@@ -96,11 +92,14 @@ def run(conf: AnalysisConfig, surface_npz: Path, mm_per_unit: float | None, unit
                                 ring_inner_mm=conf.ring_inner_mm, ring_outer_mm=conf.ring_outer_mm)  # fmt: skip
         rel = relief(vertices, faces, q, surface)
         reference = ReferenceRecord(kind=surface.kind, ring_points=surface.ring_size,
-                                    ring_rms_mm=round(surface.ring_rms_mm, 3) if scaled else None)  # fmt: skip
-        if scaled and surface.ring_rms_mm > ROUGH_RING_MM:
-            relief_note = (f"surface relief and volume are uncertain: the healthy skin around the burn departs from "
-                           f"a smooth surface by {surface.ring_rms_mm:.1f} mm (RMS), so the level it would have over "
-                           "the burn is a guess; compare with examination")  # fmt: skip
+                                    ring_rms_mm=round(surface.ring_rms_mm, 3) if scaled else None,
+                                    holdout_mm=round(surface.holdout_mm, 3) if scaled and surface.holdout_mm else None,
+                                    ridge_direction_deg=surface.model.ridge_deg)  # fmt: skip
+        misfit = surface.holdout_mm if surface.holdout_mm is not None else surface.ring_rms_mm
+        if scaled and misfit > UNCERTAIN_REFERENCE_MM:
+            relief_note = (f"surface relief and volume are uncertain: the healthy skin around the burn is uneven, and "
+                           f"a smooth surface fitted to part of it misses the rest by {misfit:.1f} mm, so the level "
+                           "the skin would have over the burn is a guess; compare with examination")  # fmt: skip
     except InvalidInput as exc:  # no healthy ring: the area still stands without relief
         relief_note = f"no surface relief or volume: {exc}"
         log.warning(relief_note)
