@@ -32,6 +32,7 @@ from processing.analysis.pipeline import run as analyze
 from processing.phantom.generate import run as render_phantom
 from processing.reconstruction.pipeline import paths as reconstruction_paths
 from schemas.config import Config
+from schemas.errors import InvalidInput
 from schemas.phantom import PhantomShape, PhantomSpec, SkinTone
 
 SHARED = Path(__file__).resolve().parents[2] / "shared" / "phantoms"
@@ -78,14 +79,18 @@ def rule_areas(out: Path) -> dict[str, float]:
     return areas
 
 
-def quartic_baseline(out: Path) -> tuple[float, float]:
-    """relief_max (mm) and volume (cm3) with the quartic reference alone on the same surface (before ridges)."""
+def quartic_baseline(out: Path) -> tuple[float | None, float | None]:
+    """relief_max (mm) and volume (cm3) with the quartic reference alone on the same surface (before ridges);
+    None when the surface has no healthy ring to fit."""
     data = np.load(out / "surface" / "burn_surface.npz")
     v, f, q = data["vertices"], data["faces"], data["q"]
     paths = reconstruction_paths(out)
     views = surface_map.output_views(paths["sfm_model"], paths["scale"])
     outward = relief.outward_from_views(views, v[np.nan_to_num(q) >= 0.5].mean(axis=0))
-    found = relief.relief(v, f, q, relief.fit_reference(v, f, q, outward, kind="quartic"))
+    try:
+        found = relief.relief(v, f, q, relief.fit_reference(v, f, q, outward, kind="quartic"))
+    except InvalidInput:
+        return None, None
     return found.max_mm, found.volume_mm3 / 1000
 
 
@@ -111,8 +116,10 @@ def row(name: str, scene: Path, work: Path, model: bool) -> dict:
         "volume_err_pct": err(m.volume_cm3, truth["volume_cm3"]) if truth["volume_cm3"] > 0.05 else None,
         "volume_cm3": m.volume_cm3, "true_volume_cm3": round(truth["volume_cm3"], 3),
         "confidence": result.confidence.score,
-        "relief_err_mm_quartic": round(quartic_relief - truth["max_depth_mm"], 2),
-        "volume_err_pct_quartic": err(quartic_volume, truth["volume_cm3"]) if truth["volume_cm3"] > 0.05 else None,
+        "relief_err_mm_quartic": round(quartic_relief - truth["max_depth_mm"], 2) if quartic_relief is not None
+        else None,
+        "volume_err_pct_quartic": err(quartic_volume, truth["volume_cm3"])
+        if truth["volume_cm3"] > 0.05 and quartic_volume is not None else None,
         "reference": result.reference.kind if result.reference else None,
         "reference_holdout_mm": result.reference.holdout_mm if result.reference else None,
         **{f"area_err_pct_{rule}": err(a, truth["burn_area_cm2"]) for rule, a in areas.items()},

@@ -121,9 +121,7 @@ class ReferenceRecord(Frozen):
     holdout_mm: float | None = None
     """Median error of the reference predicting ring skin it was not fitted to (each eighth of the ring from the
     rest), in mm when scaled: how well it can stand in for the skin under the burn. None when the ring is too
-    small to test."""
-    ridge_direction_deg: float | None = None
-    """For a ridged reference: the direction across the ridges in the reference's frame."""
+    small to test (under 600 points on a 0.7 mm grid); the uncertainty note then looks at ring_rms_mm."""
 
 
 class AnalysisResult(Frozen):

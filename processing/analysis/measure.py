@@ -93,8 +93,8 @@ def run(conf: AnalysisConfig, surface_npz: Path, mm_per_unit: float | None, unit
         rel = relief(vertices, faces, q, surface)
         reference = ReferenceRecord(kind=surface.kind, ring_points=surface.ring_size,
                                     ring_rms_mm=round(surface.ring_rms_mm, 3) if scaled else None,
-                                    holdout_mm=round(surface.holdout_mm, 3) if scaled and surface.holdout_mm else None,
-                                    ridge_direction_deg=surface.model.ridge_deg)  # fmt: skip
+                                    holdout_mm=round(surface.holdout_mm, 3)
+                                    if scaled and surface.holdout_mm is not None else None)  # fmt: skip
         misfit = surface.holdout_mm if surface.holdout_mm is not None else surface.ring_rms_mm
         if scaled and misfit > UNCERTAIN_REFERENCE_MM:
             relief_note = (f"surface relief and volume are uncertain: the healthy skin around the burn is uneven, and "

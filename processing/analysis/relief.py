@@ -44,8 +44,9 @@ quartic's error: on smooth limbs the two tie and the simpler quartic stays."""
 UNCERTAIN_REFERENCE_MM = 0.2
 """A reference that predicts unseen ring skin worse than this (median error; ring RMS when the ring is too small
 to test) makes relief and volume uncertain, and the result says so; a ridged model that does no better is not
-believed. On our foot phantoms with bumps as large as the burn (0.34 mm) volume came out 24-39 % low; references
-holding out at <= 0.13 mm were within 0.5 mm and, but for one hidden bump, 15 % (docs/benchmarks.md)."""
+believed. On the benchmark phantoms, references holding out at <= 0.14 mm gave relief within 0.5 mm and volume
+within 16 % but for one foot with a skin bump leaning into the burn (+33 %); the one above it (0.34-0.62 mm, a
+bump under the burn) gave volume -24 % or +17 % (docs/benchmarks.md)."""
 MAX_RING_GAP_DEG = 90.0
 """If the ring leaves a wider angular gap around the burn (e.g. the burn runs off the mesh), a quadratic would
 extrapolate its curvature over the burn from one side: plane."""
