@@ -70,8 +70,7 @@ def whole_face_area_mm2(vertices, faces, q) -> float:
     return float(burn_region.triangle_areas(vertices[faces])[centroid_q >= 0.5].sum())
 
 
-def rule_areas(out: Path) -> dict[str, float]:
-    data = np.load(out / "surface" / "burn_surface.npz")
+def rule_areas(data: np.lib.npyio.NpzFile) -> dict[str, float]:
     v, f = data["vertices"], data["faces"]
     areas = {rule: burn_region.burn_area_mm2(v, f, data[f"q_{rule}"]) / 100
              for rule in ("log_odds", "weighted_mean", "noisy_or")}  # fmt: skip
@@ -79,14 +78,12 @@ def rule_areas(out: Path) -> dict[str, float]:
     return areas
 
 
-def quartic_baseline(out: Path) -> tuple[float | None, float | None]:
+def quartic_baseline(out: Path, data: np.lib.npyio.NpzFile) -> tuple[float | None, float | None]:
     """relief_max (mm) and volume (cm3) with the quartic reference alone on the same surface (before ridges);
     None when the surface has no healthy ring to fit."""
-    data = np.load(out / "surface" / "burn_surface.npz")
     v, f, q = data["vertices"], data["faces"], data["q"]
     paths = reconstruction_paths(out)
-    views = surface_map.output_views(paths["sfm_model"], paths["scale"])
-    outward = relief.outward_from_views(views, v[np.nan_to_num(q) >= 0.5].mean(axis=0))
+    outward = relief.outward_at_burn(surface_map.output_views(paths["sfm_model"], paths["scale"]), v, q)
     try:
         found = relief.relief(v, f, q, relief.fit_reference(v, f, q, outward, kind="quartic"))
     except InvalidInput:
@@ -101,8 +98,9 @@ def row(name: str, scene: Path, work: Path, model: bool) -> dict:
     if result.status.value != "ok":
         return {"scene": name, "status": result.status.value, "reason": result.reason}
     m = result.metrics
-    areas = rule_areas(out)
-    quartic_relief, quartic_volume = quartic_baseline(out)
+    surface = np.load(out / "surface" / "burn_surface.npz")
+    areas = rule_areas(surface)
+    quartic_relief, quartic_volume = quartic_baseline(out, surface)
 
     def err(value: float, true: float) -> float:
         return round(100 * (value - true) / true, 2)

@@ -24,7 +24,7 @@ from processing.analysis.burn_region import (
     perimeter_mm,
     triangle_areas,
 )
-from processing.analysis.relief import UNCERTAIN_REFERENCE_MM, fit_reference, outward_from_views, relief
+from processing.analysis.relief import UNCERTAIN_REFERENCE_MM, fit_reference, outward_at_burn, relief
 from processing.reconstruction.artifacts import write_json
 from processing.reconstruction.views import View
 from schemas.analysis import BurnMetrics, ReferenceRecord
@@ -83,12 +83,10 @@ def run(conf: AnalysisConfig, surface_npz: Path, mm_per_unit: float | None, unit
     area = burn_area_mm2(vertices, faces, q)
     loops = boundary_loops(vertices, faces, q)
     perimeter = perimeter_mm(loops)
-    burn_vertices = vertices[np.nan_to_num(q) >= 0.5]
-    centre = burn_vertices.mean(axis=0)
     mm_views = [View(v.name, v.image_id, v.width, v.height, v.K, v.dist, v.R, v.t * to_mm) for v in views]
     reference, rel, relief_note = None, None, ""
     try:
-        surface = fit_reference(vertices, faces, q, outward_from_views(mm_views, centre),
+        surface = fit_reference(vertices, faces, q, outward_at_burn(mm_views, vertices, q),
                                 ring_inner_mm=conf.ring_inner_mm, ring_outer_mm=conf.ring_outer_mm)  # fmt: skip
         rel = relief(vertices, faces, q, surface)
         reference = ReferenceRecord(kind=surface.kind, ring_points=surface.ring_size,

@@ -109,6 +109,11 @@ def outward_from_views(views: list[View], point: np.ndarray) -> np.ndarray:
     return mean / np.linalg.norm(mean)
 
 
+def outward_at_burn(views: list[View], vertices: np.ndarray, q: np.ndarray, level: float = LEVEL) -> np.ndarray:
+    """Out of the body at the burn: from the burn's centroid (q >= level) towards the cameras."""
+    return outward_from_views(views, vertices[np.nan_to_num(q) >= level].mean(axis=0))
+
+
 def fit_reference(
     vertices: np.ndarray, faces: np.ndarray, q: np.ndarray, outward: np.ndarray, *,
     ring_inner_mm: float = RING_INNER_MM, ring_outer_mm: float = RING_OUTER_MM, level: float = LEVEL,
