@@ -255,6 +255,43 @@ class AnalysisConfig(Message):
             )
 
 
+class JobsConfig(Message):
+    """The gateway's durable analysis queue and its worker processes."""
+
+    workers: Annotated[int, msgspec.Meta(ge=0, le=16)] = 1
+    """Worker processes `burnedge serve` starts for analyses (0: none here; run `burnedge worker` apart).
+    One suits a 2-core mini-PC: a reconstruction keeps both cores busy."""
+    nice: Annotated[int, msgspec.Meta(ge=0, le=19)] = 10
+    """Niceness added to workers, so the API answers first while a reconstruction runs."""
+    work_dir: str = ""
+    """Folder of the analyses' work folders; empty means "burnedge-analyses" beside the database."""
+    lease_s: Annotated[float, msgspec.Meta(gt=0)] = 60.0
+    """A running job belongs to its worker this long after the last heartbeat; a worker that died (killed,
+    power cut) loses it then and the job is queued again."""
+    heartbeat_s: Annotated[float, msgspec.Meta(gt=0)] = 5.0
+    """How often a worker renews its lease and looks for a cancel request."""
+    poll_s: Annotated[float, msgspec.Meta(gt=0)] = 2.0
+    """How often an idle worker looks for a queued job."""
+    max_attempts: Annotated[int, msgspec.Meta(ge=1, le=20)] = 3
+    """Tries of a job that crashed or whose worker died before it is marked failed (with the last reason)."""
+    retry_base_s: Annotated[float, msgspec.Meta(ge=0)] = 30.0
+    """Wait before the second try; doubled for each further one, with up to 20 % random jitter."""
+    retry_max_s: Annotated[float, msgspec.Meta(ge=0)] = 900.0
+    """Longest wait between tries."""
+    reap_every_s: Annotated[int, msgspec.Meta(ge=1)] = 10
+    """How often the gateway requeues jobs whose lease ran out and restarts dead workers."""
+    retention_days: Annotated[float, msgspec.Meta(ge=0)] = 30.0
+    """After this many days a finished analysis keeps only its results (analysis.json, meshes, masks, overlays,
+    metrics); the copied pictures, COLMAP database and depth maps are removed. Failed and cancelled jobs'
+    folders go entirely."""
+    cleanup_every_s: Annotated[int, msgspec.Meta(ge=60)] = 3600
+    """How often the retention clean-up runs."""
+
+    def __post_init__(self) -> None:
+        if self.heartbeat_s >= self.lease_s:
+            raise ValueError(f"heartbeat_s ({self.heartbeat_s:g}) must be shorter than lease_s ({self.lease_s:g})")
+
+
 class Config(Message):
     gateway: GatewayConfig = msgspec.field(default_factory=GatewayConfig)
     """The HTTP gateway and its database."""
@@ -274,6 +311,8 @@ class Config(Message):
     """SfM, metric scale, multi-view stereo and meshing."""
     analysis: AnalysisConfig = msgspec.field(default_factory=AnalysisConfig)
     """Burn segmentation, mapping onto the surface, and metrics."""
+    jobs: JobsConfig = msgspec.field(default_factory=JobsConfig)
+    """The analysis queue and its workers."""
 
 
 def load_config(path: str | Path | None = None, environ: dict[str, str] | None = None) -> Config:
@@ -290,7 +329,7 @@ def load_config(path: str | Path | None = None, environ: dict[str, str] | None =
     sections = (("gateway", GatewayConfig), ("security", SecurityConfig), ("clinical", ClinicalConfig),
                 ("quality", QualityGateConfig), ("uploads", UploadConfig), ("frames", FramesConfig),
                 ("readiness", ReadinessConfig), ("reconstruction", ReconstructionConfig),
-                ("analysis", AnalysisConfig))  # fmt: skip
+                ("analysis", AnalysisConfig), ("jobs", JobsConfig))  # fmt: skip
     for section, struct in sections:
         defaults = struct()
         for field in struct.__struct_fields__:
