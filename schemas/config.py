@@ -292,6 +292,77 @@ class JobsConfig(Message):
             raise ValueError(f"heartbeat_s ({self.heartbeat_s:g}) must be shorter than lease_s ({self.lease_s:g})")
 
 
+class TrackingConfig(Message):
+    """Healing over time: registering each visit's surface to the first one, and the healing figures.
+    How the values were chosen: docs/healing.md."""
+
+    burn_margin_mm: Annotated[float, msgspec.Meta(ge=0)] = 5.0
+    """Skin within this distance of the burn (of either visit) is left out: the burn shrinks and flattens, and
+    its edge swells."""
+    skin_ring_mm: Annotated[float, msgspec.Meta(gt=0)] = 20.0
+    """Healthy skin is taken from a ring this wide beyond the margin around the burn (the reconstructed skin
+    farther out is seen at grazing angles and the drape comes close)."""
+    plane_distance_mm: Annotated[float, msgspec.Meta(gt=0)] = 1.0
+    """RANSAC plane fit: points this close to the dominant plane (the drape or table) belong to it."""
+    plane_clearance_mm: Annotated[float, msgspec.Meta(ge=0)] = 4.0
+    """Points lower than this above the dominant plane are left out: the drape does not move with the limb."""
+    voxel_mm: Annotated[float, msgspec.Meta(gt=0)] = 1.0
+    """Point spacing for the coarse alignment (FPFH features and RANSAC)."""
+    fpfh_radius_mm: Annotated[float, msgspec.Meta(gt=0)] = 5.0
+    """Neighbourhood radius of the FPFH features."""
+    texture_feature_weight: Annotated[float, msgspec.Meta(ge=0)] = 1.0
+    """Weight of the skin-texture descriptor next to FPFH in the coarse matching (0: shape only). On the
+    near-cylindrical phantom forearms shape alone found the right alignment in 4-5 of 10 RANSAC tries, with
+    texture in 10 of 10."""
+    ransac_distance_mm: Annotated[float, msgspec.Meta(gt=0)] = 1.5
+    """RANSAC: a feature match is an inlier when its points land this close."""
+    ransac_iterations: Annotated[int, msgspec.Meta(ge=1000)] = 100_000
+    """RANSAC iterations per try."""
+    ransac_tries: Annotated[int, msgspec.Meta(ge=1, le=20)] = 5
+    """Independent RANSAC tries (seeds seed, seed+1, ...), each refined by ICP; the one whose skin texture agrees
+    best wins (then the one matching most skin). A limb is nearly a cylinder: single tries may land on a turned or
+    slid copy of it."""
+    seed: int = 0
+    """Seed of the first RANSAC try, so a rerun gives the same transform."""
+    fine_voxel_mm: Annotated[float, msgspec.Meta(gt=0)] = 0.5
+    """Point spacing for the ICP refinement."""
+    icp_distances_mm: list[float] = msgspec.field(default_factory=lambda: [3.0, 1.5, 0.8])
+    """ICP rounds, each with this largest correspondence distance (coarse to fine); the last one also defines
+    the overlap and the RMSE reported."""
+    point_to_plane: bool = True
+    """Point-to-plane ICP (converges on smooth skin where point-to-point slides); false: point-to-point."""
+    max_rmse_mm: Annotated[float, msgspec.Meta(gt=0)] = 0.3
+    """Above this RMSE (distance of the visit's healthy skin from the first visit's surface, along its normals) the
+    registration is flagged as poor; right alignments gave 0.05-0.08 mm on the phantoms."""
+    min_overlap: Annotated[float, msgspec.Meta(gt=0, le=1)] = 0.4
+    """Below this share of the visit's healthy-skin points matched on the first visit's surface, the
+    registration is flagged as poor (a different body part, or too little skin around the burn)."""
+    min_texture_agreement: Annotated[float, msgspec.Meta(ge=-1, le=1)] = 0.1
+    """Below this correlation of the skin's fine texture between matched points the registration is flagged
+    (a wrong alignment correlated within ±0.03 on the phantoms, right ones 0.17-0.63). Lighting, hair growth and
+    dressings lower it on real skin."""
+    max_burn_shift_mm: Annotated[float, msgspec.Meta(gt=0)] = 15.0
+    """A registration that moves the burn's centre by more than this on the skin is flagged as doubtful (burns
+    contract towards their centre; they do not wander)."""
+    min_points: Annotated[int, msgspec.Meta(ge=10)] = 300
+    """Fewer healthy-skin points (at the coarse spacing) than this and the visit is not registered."""
+    stall_reduction_percent: Annotated[float, msgspec.Meta(ge=0, le=100)] = 40.0
+    """Prompt for review when the area has shrunk by less than this share..."""
+    stall_after_days: Annotated[float, msgspec.Meta(gt=0)] = 28.0
+    """...this many days after the first measured visit (4 weeks, Kantor & Margolis 2000)."""
+    healing_deadline_day: Annotated[float, msgspec.Meta(gt=0)] = 21.0
+    """Prompt for surgical review when the burn is not healed on this day after the injury (Deitch et al. 1983:
+    hypertrophic scarring in 78 % of sites that took longer than 21 days)."""
+    healed_area_cm2: Annotated[float, msgspec.Meta(ge=0)] = 0.5
+    """A burn measured smaller than this counts as healed for the day-21 prompt (below what the surface
+    reconstruction can tell from a few specks)."""
+
+    def __post_init__(self) -> None:
+        if not self.icp_distances_mm or min(self.icp_distances_mm) <= 0:
+            raise msgspec.ValidationError(f"icp_distances_mm must hold one or more positive distances, "
+                                          f"got {self.icp_distances_mm}")  # fmt: skip
+
+
 class Config(Message):
     gateway: GatewayConfig = msgspec.field(default_factory=GatewayConfig)
     """The HTTP gateway and its database."""
@@ -313,6 +384,8 @@ class Config(Message):
     """Burn segmentation, mapping onto the surface, and metrics."""
     jobs: JobsConfig = msgspec.field(default_factory=JobsConfig)
     """The analysis queue and its workers."""
+    tracking: TrackingConfig = msgspec.field(default_factory=TrackingConfig)
+    """Healing over time: registration of each visit to the first, healing rate and review prompts."""
 
 
 def load_config(path: str | Path | None = None, environ: dict[str, str] | None = None) -> Config:
@@ -329,7 +402,8 @@ def load_config(path: str | Path | None = None, environ: dict[str, str] | None =
     sections = (("gateway", GatewayConfig), ("security", SecurityConfig), ("clinical", ClinicalConfig),
                 ("quality", QualityGateConfig), ("uploads", UploadConfig), ("frames", FramesConfig),
                 ("readiness", ReadinessConfig), ("reconstruction", ReconstructionConfig),
-                ("analysis", AnalysisConfig), ("jobs", JobsConfig))  # fmt: skip
+                ("analysis", AnalysisConfig), ("jobs", JobsConfig),
+                ("tracking", TrackingConfig))  # fmt: skip
     for section, struct in sections:
         defaults = struct()
         for field in struct.__struct_fields__:
