@@ -1,4 +1,4 @@
-"""The analysis commands of the CLI: segment, analyze, train-segmentation."""
+"""The analysis commands of the CLI: segment, analyze, track, train-segmentation."""
 
 from __future__ import annotations
 
@@ -101,6 +101,63 @@ def cmd_analyze(args: argparse.Namespace, config: Config) -> int:
     return 0
 
 
+def parse_days(text: str, count: int) -> list[float]:
+    """--days: one day per visit, comma-separated, never decreasing."""
+    try:
+        days = [float(part) for part in text.split(",") if part.strip()]
+    except ValueError as exc:
+        raise InvalidInput(f"--days {text}: give numbers separated by commas, e.g. 0,7,14,21") from exc
+    if len(days) != count:
+        raise InvalidInput(f"--days {text}: {len(days)} day(s) for {count} visit folder(s); give one day per visit")
+    if any(not 0 <= d < 10_000 for d in days):
+        raise InvalidInput(f"--days {text}: days count from the injury (or the first visit) and must be 0 or more")
+    for earlier, later in zip(days, days[1:], strict=False):
+        if later < earlier:
+            raise InvalidInput(f"--days {text}: days must not decrease (day {later:g} after day {earlier:g}); give "
+                               "the visit folders in time order")  # fmt: skip
+    return days
+
+
+def cmd_track(args: argparse.Namespace, config: Config) -> int:
+    import shutil
+
+    from processing.analysis.pipeline import Patient
+    from processing.analysis.pipeline import run as analyze
+    from processing.longitudinal import track
+    from schemas.longitudinal import TrackResult
+
+    days = parse_days(args.days, len(args.sessions))
+    out = Path(args.out).resolve()
+    visits = []
+    for folder in args.sessions:
+        source = Path(folder).resolve()
+        if not source.is_dir():
+            raise NotFound(f"{folder} is not a folder of one visit's photos")
+        if out == source or out in source.parents or source in out.parents:
+            raise InvalidInput(f"--out {args.out} overlaps the visit folder {folder}; choose a separate folder")
+        images = source / "images" if (source / "images").is_dir() else source
+        masks = source / "masks" if (source / "masks").is_dir() else None
+        visits.append((images, masks))
+    if args.fresh and out.exists():
+        if any(out.iterdir()) and not ((out / track.RESULT).exists() or (out / "sessions").is_dir()):
+            raise InvalidInput(f"--fresh: {args.out} does not look like a track folder; not deleting it")
+        shutil.rmtree(out)
+    sessions = []
+    for i, (day, (images, masks)) in enumerate(zip(days, visits, strict=True)):
+        folder = out / "sessions" / f"{i:02d}_day{day:g}"
+        log.info("visit %d of %d (day %g): analysing %s", i + 1, len(visits), day, images)
+        result = analyze(config, images, folder, masks=masks, patient=Patient(hours_since_injury=day * 24))
+        if result.status.value == "failed":
+            log.warning("visit %d (day %g) failed: %s", i + 1, day, result.reason)
+        sessions.append(track.SessionAnalysis(day=day, analysis_dir=folder, label=Path(args.sessions[i]).name))
+    path = track.run(config.tracking, sessions, out)
+    print(path.read_text())
+    if not any(s.baseline for s in msgspec.json.decode(path.read_bytes(), type=TrackResult).sessions):
+        log.error("no visit could be measured in real units: nothing to track")
+        return 7
+    return 0
+
+
 def cmd_train_segmentation(args: argparse.Namespace, config: Config) -> int:
     try:
         from processing.segmentation.train import run
@@ -147,6 +204,18 @@ def add_commands(sub, config_of: Callable[[argparse.Namespace], Config]) -> None
     ana.add_argument("--fresh", action="store_true", help="discard what an earlier run left in OUT")
     ana.add_argument("--no-gate", action="store_true", help="use every decodable picture, even rejected ones")
     ana.set_defaults(func=bind(cmd_analyze))
+
+    trk = sub.add_parser("track", help="a burn's visits over time -> changes, healing rate, prompts (track.json)")
+    trk.add_argument("sessions", nargs="+", metavar="SESSION_DIR",
+                     help="one folder per visit, in time order: its photos, or images/ with an optional masks/ "
+                          "(a person's masks, STEM.png)")  # fmt: skip
+    trk.add_argument("--days", required=True, metavar="D,D,...",
+                     help="day of each visit since the injury (or the first visit), e.g. 0,7,14,21")  # fmt: skip
+    trk.add_argument("--out", required=True, metavar="OUT",
+                     help="folder for each visit's analysis (sessions/NN_dayD), the registrations and track.json; "
+                          "an interrupted run resumes there")  # fmt: skip
+    trk.add_argument("--fresh", action="store_true", help="discard what an earlier run left in OUT")
+    trk.set_defaults(func=bind(cmd_track))
 
     train = sub.add_parser("train-segmentation", help="train the segmentation model on the CPU, export ONNX")
     train.add_argument("--data", default="../shared/datasets/fuseg2021-train", metavar="DIR",
