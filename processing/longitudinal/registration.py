@@ -170,7 +170,8 @@ def texture_agreement(transform: np.ndarray, source: Skin, target: Skin, distanc
     matched = np.isfinite(gap)
     if matched.sum() < 50:
         return 0.0
-    return float(np.corrcoef(source.texture[matched], target.texture[nearest[matched]])[0, 1])
+    correlation = float(np.corrcoef(source.texture[matched], target.texture[nearest[matched]])[0, 1])
+    return correlation if math.isfinite(correlation) else 0.0  # a flat texture (no detail) confirms nothing
 
 
 TEXTURE_RINGS_MM = (0.0, 1.5, 3.0, 4.5, 6.0)
@@ -242,7 +243,6 @@ class _Try:
     seed: int
     transform: np.ndarray
     overlap: float
-    rmse: float
     texture: float | None
 
     @property
@@ -266,7 +266,7 @@ def coarse_tries(conf: TrackingConfig, source: Skin, target: Skin, fine_source: 
         fine = icp(conf, fine_source.cloud, fine_target.cloud, coarse.transformation)
         transform = np.array(fine.transformation)
         texture = texture_agreement(transform, fine_source, fine_target, conf.icp_distances_mm[-1])
-        tries.append(_Try(conf.seed + k, transform, fine.fitness, fine.inlier_rmse, texture))
+        tries.append(_Try(conf.seed + k, transform, fine.fitness, texture))
     return sorted(tries, key=lambda t: t.score, reverse=True)
 
 
