@@ -89,12 +89,16 @@ def check_request(config: Config, out: Path, masks: Path | None, patient: Patien
 
 
 def run(config: Config, source: Path, out: Path, *, masks: Path | None = None, ruler: RulerPoints | None = None,
-        patient: Patient | None = None, gate: bool = True) -> AnalysisResult:  # fmt: skip
-    """Run (or resume) the whole analysis; the result is also written to OUT/analysis.json."""
+        patient: Patient | None = None, gate: bool = True,
+        progress: Callable[[str], None] | None = None) -> AnalysisResult:  # fmt: skip
+    """Run (or resume) the whole analysis; the result is also written to OUT/analysis.json.
+
+    `progress(stage)` is called as each stage of the reconstruction and of the analysis starts.
+    """
     patient = patient or Patient()
     check_request(config, out, masks, patient)
     (out / RESULT).unlink(missing_ok=True)
-    report = reconstruction.run(config, source, out, ruler, gate=gate)
+    report = reconstruction.run(config, source, out, ruler, gate=gate, progress=progress)
     timings = {t.stage: t.seconds for t in report.timings}
 
     def failed(reason: str, code: FailureCode) -> AnalysisResult:
@@ -106,7 +110,7 @@ def run(config: Config, source: Path, out: Path, *, masks: Path | None = None, r
         return failed(report.reason, report.failure)
     p = {"segment": out / "segmentation" / segment_views.RECORD, "surface": out / "surface" / surface_map.ARRAYS,
          "metrics": out / "metrics" / measure.RESULT}  # fmt: skip
-    stages = Stages(out / FINGERPRINTS, p, fingerprints(config, out, masks))
+    stages = Stages(out / FINGERPRINTS, p, fingerprints(config, out, masks), progress)
 
     def stage(name: str, work: Callable[[], object]) -> None:
         stages.run(name, work)

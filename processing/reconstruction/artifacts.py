@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import functools
+import hashlib
 import json
 import logging
 import os
@@ -18,6 +20,24 @@ from schemas.reconstruction import StageTiming
 log = logging.getLogger(__name__)
 
 T = TypeVar("T")
+
+
+CODE_PACKAGES = ("capture", "reconstruction", "segmentation", "analysis")
+"""The processing packages whose code makes the analysis artifacts..."""
+ARTIFACT_SCHEMAS = ("capture", "reconstruction", "segmentation", "analysis")
+"""...and the schemas the artifacts are written in."""
+
+
+@functools.cache
+def code_digest() -> str:
+    """Hash of the science and schema code: a stage made by other code is rerun, never reused (a resumed job
+    after an upgrade must not read artifacts the new code would not have written)."""
+    root = Path(__file__).resolve().parents[2]
+    digest = hashlib.sha256()
+    code = [p for package in CODE_PACKAGES for p in (root / "processing" / package).rglob("*.py")]
+    for path in sorted(code + [root / "schemas" / f"{name}.py" for name in ARTIFACT_SCHEMAS]):
+        digest.update(str(path.relative_to(root)).encode() + b"\0" + path.read_bytes())
+    return digest.hexdigest()
 
 
 def write_json(path: Path, value: object) -> Path:
@@ -59,13 +79,17 @@ class Stages:
     nothing stale outlives its rerun; its fingerprint is stored only once it has finished.
     """
 
-    def __init__(self, fingerprints_file: Path, done: dict[str, Path], wanted: dict[str, str]):
-        self.file, self.done, self.wanted = fingerprints_file, done, wanted
+    def __init__(self, fingerprints_file: Path, done: dict[str, Path], wanted: dict[str, str],
+                 on_start: Callable[[str], None] | None = None):  # fmt: skip
+        """`on_start(name)` is told of each stage as it begins (or is found finished): progress for a waiting user."""
+        self.file, self.done, self.wanted, self.on_start = fingerprints_file, done, wanted, on_start
         self.order = list(done)
         self.stored = json.loads(fingerprints_file.read_text()) if fingerprints_file.exists() else {}
         self.timings: list[StageTiming] = []
 
     def run(self, name: str, work: Callable[[], object]) -> None:
+        if self.on_start is not None:
+            self.on_start(name)
         if self.done[name].exists() and self.stored.get(name) == self.wanted[name]:
             self.timings.append(StageTiming(stage=name, seconds=0.0, resumed=True))
             return

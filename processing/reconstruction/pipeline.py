@@ -17,13 +17,14 @@ from __future__ import annotations
 import hashlib
 import json
 import logging
+from collections.abc import Callable
 from importlib import metadata
 from pathlib import Path
 
 import msgspec
 
 from processing.reconstruction import dense, inputs, mesh, scale, sfm
-from processing.reconstruction.artifacts import Stages, read_json, write_json
+from processing.reconstruction.artifacts import Stages, code_digest, read_json, write_json
 from schemas.config import Config
 from schemas.errors import CaptureInsufficient, NotFound
 from schemas.reconstruction import (
@@ -70,7 +71,7 @@ def fingerprints(config: Config, source: Path, ruler: RulerPoints | None, gate: 
     listing = [(f.name, f.stat().st_size, f.stat().st_mtime_ns) for f in files if f.is_file()]
     chain: dict[str, str] = {}
     parts = {
-        "inputs": [str(source.resolve()), listing, msgspec.to_builtins(config.quality),
+        "inputs": [code_digest(), str(source.resolve()), listing, msgspec.to_builtins(config.quality),
                    msgspec.to_builtins(config.frames), gate],
         "sfm": [msgspec.to_builtins(config.reconstruction)],
         "scale": [msgspec.to_builtins(ruler) if ruler else None],
@@ -84,9 +85,12 @@ def fingerprints(config: Config, source: Path, ruler: RulerPoints | None, gate: 
     return chain
 
 
-def run(config: Config, source: Path, out: Path, ruler: RulerPoints | None = None, *,
-        gate: bool = True) -> ReconstructionReport:  # fmt: skip
-    """Run (or resume) every stage; the report is also written to OUT/report.json."""
+def run(config: Config, source: Path, out: Path, ruler: RulerPoints | None = None, *, gate: bool = True,
+        progress: Callable[[str], None] | None = None) -> ReconstructionReport:  # fmt: skip
+    """Run (or resume) every stage; the report is also written to OUT/report.json.
+
+    `progress(stage)` is called as each stage starts (or is found finished).
+    """
     conf = config.reconstruction
     p = paths(out)
     for folder in ("sfm", "scale", "dense", "mesh"):
@@ -95,7 +99,7 @@ def run(config: Config, source: Path, out: Path, ruler: RulerPoints | None = Non
     if not source.exists():
         raise NotFound(f"{source} does not exist")
     stages = Stages(out / FINGERPRINTS, {name: p[DONE[name]] for name in STAGES},
-                    fingerprints(config, source, ruler, gate))  # fmt: skip
+                    fingerprints(config, source, ruler, gate), progress)  # fmt: skip
     stage, timings = stages.run, stages.timings
 
     pictures: list[str] = []
