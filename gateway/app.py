@@ -9,6 +9,7 @@ from litestar.openapi import OpenAPIConfig
 
 from gateway import __version__
 from gateway.authentication import session_auth
+from gateway.controllers.analyses import AnalysisController
 from gateway.controllers.assets import AssetController
 from gateway.controllers.auth import AdminController, AuthController
 from gateway.controllers.health import health
@@ -18,15 +19,18 @@ from gateway.controllers.sync import SyncController
 from gateway.controllers.uploads import UploadController
 from gateway.dependencies import Services, provide_services
 from gateway.errors import EXCEPTION_HANDLERS
+from gateway.jobs.supervisor import Workers
 from gateway.scheduler import start_scheduler
 from gateway.storage.database import Database
 from schemas.config import Config
 
 
-def create_app(config: Config) -> Litestar:
+def create_app(config: Config, *, start_workers: bool = False) -> Litestar:
+    """The gateway; `start_workers` also runs config.jobs.workers analysis worker processes beside it (serve)."""
     db = Database.from_config(config.gateway)
     db.migrate()
     services = Services.build(config, db)
+    workers = Workers(config) if start_workers and config.jobs.workers else None
     return Litestar(
         route_handlers=[
             health,
@@ -38,6 +42,7 @@ def create_app(config: Config) -> Litestar:
             SyncController,
             UploadController,
             AssetController,
+            AnalysisController,
         ],  # fmt: skip
         dependencies={
             "services": Provide(provide_services, sync_to_thread=False, use_cache=True),
@@ -52,7 +57,19 @@ def create_app(config: Config) -> Litestar:
             path="/schema",
         ),
         state=State({"services": services}),
-        on_startup=[lambda app: setattr(app.state, "scheduler", start_scheduler(services))],
-        on_shutdown=[lambda app: app.state.scheduler.shutdown(wait=False), lambda app: db.close()],
+        on_startup=[lambda app: _start_background(app, services, workers)],
+        on_shutdown=[lambda app: _stop_background(app, workers), lambda app: db.close()],
         request_max_body_size=config.gateway.max_body_bytes,
     )
+
+
+def _start_background(app: Litestar, services: Services, workers: Workers | None) -> None:
+    if workers is not None:
+        workers.start()
+    app.state.scheduler = start_scheduler(services, workers)
+
+
+def _stop_background(app: Litestar, workers: Workers | None) -> None:
+    app.state.scheduler.shutdown(wait=False)
+    if workers is not None:
+        workers.stop()

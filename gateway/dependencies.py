@@ -9,12 +9,13 @@ from litestar.datastructures import State
 from litestar.di import NamedDependency
 
 from gateway.services.accounts import AccountService
+from gateway.services.analyses import AnalysisService
 from gateway.services.assets import AssetService
 from gateway.services.frames import FrameService
 from gateway.services.permissions import Principal
 from gateway.services.records import RecordService
 from gateway.services.uploads import UploadService
-from gateway.storage.blobs import MediaStore
+from gateway.storage.blobs import MediaStore, media_root
 from gateway.storage.database import Database
 from schemas.config import Config
 from sync.phone_sync import PhoneSync
@@ -30,11 +31,12 @@ class Services:
     assets: AssetService
     uploads: UploadService
     frames: FrameService
+    analyses: AnalysisService
 
     @classmethod
     def build(cls, config: Config, db: Database) -> Services:
         records = RecordService(db, config)
-        store = MediaStore(config.uploads.data_dir or db.path.parent / "burnedge-media")
+        store = MediaStore(media_root(config))
         assets = AssetService(db, config, store)
         return cls(
             config=config,
@@ -45,6 +47,7 @@ class Services:
             assets=assets,
             uploads=UploadService(db, config, store, assets),
             frames=FrameService(db, config, assets),
+            analyses=AnalysisService(db, config, assets),
         )
 
 

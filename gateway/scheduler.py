@@ -1,4 +1,4 @@
-"""Periodic work of the gateway, driven by APScheduler: upload housekeeping, frames from new videos."""
+"""Periodic work of the gateway, driven by APScheduler."""
 
 from __future__ import annotations
 
@@ -7,13 +7,17 @@ import logging
 from apscheduler.schedulers.background import BackgroundScheduler
 
 from gateway.dependencies import Services
+from gateway.jobs.folders import clean_up
+from gateway.jobs.supervisor import Workers
 from schemas.base import utcnow
 
 log = logging.getLogger("burnedge.scheduler")
 FRAMES_JOB = "extract-frames"
 
 
-def start_scheduler(services: Services) -> BackgroundScheduler:
+def start_scheduler(services: Services, workers: Workers | None = None) -> BackgroundScheduler:
+    """Upload housekeeping, frames from videos, requeueing jobs of dead workers, restarting those workers, and
+    the analyses' retention clean-up; each job never runs twice at once."""
     scheduler = BackgroundScheduler(daemon=True)
     config = services.config
 
@@ -27,6 +31,13 @@ def start_scheduler(services: Services) -> BackgroundScheduler:
                       id="upload-housekeeping", coalesce=True, max_instances=1, next_run_time=utcnow())  # fmt: skip
     scheduler.add_job(services.frames.extract_pending, "interval", seconds=config.frames.poll_every_s, id=FRAMES_JOB,
                       coalesce=True, max_instances=1, next_run_time=utcnow())  # fmt: skip
+    scheduler.add_job(services.analyses.queue.reap, "interval", seconds=config.jobs.reap_every_s, id="requeue-lost-jobs",
+                      coalesce=True, max_instances=1, next_run_time=utcnow())  # fmt: skip
+    if workers is not None:
+        scheduler.add_job(workers.check, "interval", seconds=config.jobs.reap_every_s, id="restart-dead-workers",
+                          coalesce=True, max_instances=1)  # fmt: skip
+    scheduler.add_job(lambda: clean_up(services.db, config), "interval", seconds=config.jobs.cleanup_every_s,
+                      id="analysis-retention", coalesce=True, max_instances=1, next_run_time=utcnow())  # fmt: skip
     scheduler.start()
     return scheduler
 

@@ -9,6 +9,7 @@ import msgspec
 from schemas.base import Frozen, Id, ShortText, Timestamp
 from schemas.burn_chart import BurnChart
 from schemas.clinical_results import Assessment
+from schemas.jobs import BurnAnalysis
 from schemas.patient import Encounter, Patient
 from schemas.record_parts import Intake, Mechanism, PrimarySurvey, Resuscitation, SecondarySurvey
 
@@ -24,6 +25,8 @@ class RecordKind(enum.StrEnum):
     resuscitation = "resuscitation"
     assessment = "assessment"
     """Calculator results; written by the server only."""
+    burn_analysis = "burn_analysis"
+    """A finished 3D burn analysis of an encounter's pictures; written by the gateway's workers only."""
 
     @property
     def label(self) -> str:
@@ -41,6 +44,7 @@ RECORD_TYPES: dict[RecordKind, type[msgspec.Struct]] = {
     RecordKind.burn_chart: BurnChart,
     RecordKind.resuscitation: Resuscitation,
     RecordKind.assessment: Assessment,
+    RecordKind.burn_analysis: BurnAnalysis,
 }
 
 # Encounter parts are one per encounter: their record id is the encounter's id.

@@ -119,18 +119,22 @@ class GatewayProcess:
         self.env: dict[str, str] = {}
         """Extra BURNEDGE_* settings for the process."""
         self.url = f"http://127.0.0.1:{port}"
+        self.log = db.with_suffix(".log")
+        """The gateway's (and its workers') output."""
         self.proc: subprocess.Popen | None = None
 
     def start(self, timeout: float = 30.0) -> GatewayProcess:
         env = {**os.environ, **FAST_HASH_ENV, **self.env}
-        self.proc = subprocess.Popen(
-            [sys.executable, "-m", "gateway.cli", "--db", str(self.db), "serve", "--port", str(self.port)],
-            env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-        )  # fmt: skip
+        # A file, not a pipe: a full pipe nobody reads would block the gateway and its workers on their next log line.
+        with open(self.log, "ab") as log:
+            self.proc = subprocess.Popen(
+                [sys.executable, "-m", "gateway.cli", "--db", str(self.db), "serve", "--port", str(self.port)],
+                env=env, stdout=log, stderr=subprocess.STDOUT,
+            )  # fmt: skip
         deadline = time.monotonic() + timeout
         while time.monotonic() < deadline:
             if self.proc.poll() is not None:
-                raise RuntimeError(f"gateway exited early: {self.proc.stdout.read().decode(errors='replace')}")
+                raise RuntimeError(f"gateway exited early: {self.log.read_text(errors='replace')[-4000:]}")
             try:
                 if httpx.get(self.url + "/health", timeout=1).status_code == 200:
                     return self

@@ -261,7 +261,7 @@ def _valid_body(path: str, record_id: str) -> dict | None:
         "primary-survey": {"encounter_id": record_id, "assessed_at": t},
         "secondary-survey": {"encounter_id": record_id, "assessed_at": t},
         "burn-chart": {"encounter_id": record_id, "assessed_at": t},
-        "mechanism": {"encounter_id": record_id, "type": "scald"},
+        "mechanism": {"encounter_id": record_id, "type": "scald"}, "analyses": {},
     }  # fmt: skip
     if part in bodies:
         return bodies[part]

@@ -183,3 +183,45 @@ def m004_uploads_and_assets(db: Database) -> None:
 def m005_video_frames(db: Database) -> None:
     db.execute("ALTER TABLE assets ADD COLUMN frames_done_at TEXT")
     db.execute("ALTER TABLE assets ADD COLUMN frames_error TEXT")
+
+
+@migrations()
+def m006_analysis_jobs(db: Database) -> None:
+    db.execute(
+        """
+        CREATE TABLE analysis_jobs (
+            id TEXT PRIMARY KEY,
+            encounter_id TEXT NOT NULL,
+            patient_id TEXT NOT NULL,
+            input_digest TEXT NOT NULL,
+            request TEXT NOT NULL,
+            state TEXT NOT NULL,
+            priority INTEGER NOT NULL,
+            stage TEXT NOT NULL DEFAULT '',
+            fraction REAL NOT NULL DEFAULT 0,
+            message TEXT NOT NULL DEFAULT '',
+            attempts INTEGER NOT NULL DEFAULT 0,
+            max_attempts INTEGER NOT NULL,
+            next_attempt_at TEXT NOT NULL,
+            lease_owner TEXT,
+            lease_expires_at TEXT,
+            cancel_requested INTEGER NOT NULL DEFAULT 0,
+            error TEXT,
+            pictures INTEGER NOT NULL,
+            result_status TEXT,
+            created_at TEXT NOT NULL,
+            created_by TEXT NOT NULL,
+            user_id TEXT NOT NULL,
+            started_at TEXT,
+            finished_at TEXT,
+            cleaned_at TEXT
+        )"""
+    )
+    # One live or finished analysis per encounter and input set: asking again returns it, never a second copy.
+    db.execute(
+        "CREATE UNIQUE INDEX analysis_jobs_once ON analysis_jobs (encounter_id, input_digest)"
+        " WHERE state IN ('queued', 'running', 'done')"
+    )
+    db.execute("CREATE INDEX analysis_jobs_queue ON analysis_jobs (state, priority, created_at)")
+    db.execute("CREATE INDEX analysis_jobs_encounter ON analysis_jobs (encounter_id, created_at)")
+    db.execute("CREATE INDEX analysis_jobs_patient ON analysis_jobs (patient_id, created_at)")

@@ -1,0 +1,1 @@
+"""The durable analysis queue, its workers and their files."""

@@ -1,0 +1,101 @@
+"""Where each analysis job keeps its files, which of them a user may download, and the retention clean-up.
+
+WORK/<job id>/source/<asset id>.<ext>     the pictures, linked from the media store
+WORK/<job id>/masks/<asset id>.png|.json  a clinician's masks or outlines
+WORK/<job id>/ruler.json                  ruler points, when given
+WORK/<job id>/analysis/                   the analysis folder (processing/analysis/pipeline.py)
+WORK/patients/<patient id>/               the patient's healing track (track.json)
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import logging
+import shutil
+from pathlib import Path
+
+from gateway.storage.database import Database
+from schemas.base import iso, utcnow
+from schemas.config import Config
+from schemas.errors import NotFound
+
+log = logging.getLogger("burnedge.jobs")
+
+DELIVERABLES = (
+    "analysis.json",
+    "report.json",
+    "mesh/surface.glb",
+    "mesh/surface.ply",
+    "surface/burn_surface.glb",
+    "metrics/metrics.json",
+    "segmentation/segmentation.json",
+    "segmentation/masks/*.png",
+    "segmentation/overlays/*.jpg",
+    "segmentation/probability/*.png",
+)
+"""What an analysis keeps after the retention period, and all a user may download from it."""
+SCRATCH = ("source", "masks", "analysis/images", "analysis/sfm/database.db", "analysis/sfm/work", "analysis/dense")
+"""What the retention clean-up removes from a finished analysis: copies of the pictures (the media store keeps
+them), the feature database and the depth maps. The mesh and the painted burn stay for the healing track."""
+
+
+def work_root(config: Config) -> Path:
+    if config.jobs.work_dir:
+        return Path(config.jobs.work_dir)
+    return Path(config.gateway.database).resolve().parent / "burnedge-analyses"
+
+
+def job_dir(config: Config, job_id: str) -> Path:
+    return work_root(config) / job_id
+
+
+def analysis_dir(config: Config, job_id: str) -> Path:
+    return job_dir(config, job_id) / "analysis"
+
+
+def patient_dir(config: Config, patient_id: str) -> Path:
+    return work_root(config) / "patients" / patient_id
+
+
+def artifacts(config: Config, job_id: str) -> list[str]:
+    """The downloadable files of a job, relative to its analysis folder."""
+    folder = analysis_dir(config, job_id)
+    found = {str(p.relative_to(folder)) for pattern in DELIVERABLES for p in folder.glob(pattern) if p.is_file()}
+    return sorted(found)
+
+
+def artifact_file(config: Config, job_id: str, name: str) -> Path:
+    """One downloadable file; anything else (another path, `..`) is not found."""
+    if name not in artifacts(config, job_id):
+        raise NotFound(f"analysis {job_id} has no file {name!r}; GET its artifacts for the list")
+    return analysis_dir(config, job_id) / name
+
+
+def clean_up(db: Database, config: Config) -> int:
+    """Apply the retention period to finished jobs' folders; returns how many were cleaned."""
+    cutoff = iso(utcnow() - dt.timedelta(days=config.jobs.retention_days))
+    rows = (
+        db.connection()
+        .execute(
+            "SELECT id, state FROM analysis_jobs WHERE state IN ('done', 'failed', 'cancelled') AND finished_at < ?"
+            " AND cleaned_at IS NULL",
+            (cutoff,),
+        )
+        .fetchall()
+    )
+    for row in rows:
+        folder = job_dir(config, row["id"])
+        if row["state"] == "done":
+            for part in SCRATCH:
+                path = folder / part
+                if path.is_dir():
+                    shutil.rmtree(path, ignore_errors=True)
+                else:
+                    path.unlink(missing_ok=True)
+        else:
+            shutil.rmtree(folder, ignore_errors=True)
+        with db.write() as conn:
+            conn.execute("UPDATE analysis_jobs SET cleaned_at = ? WHERE id = ?", (iso(utcnow()), row["id"]))
+        log.info("analysis %s (%s): work files past the %g-day retention removed", row["id"], row["state"],
+                 config.jobs.retention_days)  # fmt: skip
+    return len(rows)

@@ -1,0 +1,183 @@
+"""One try of one analysis job, run in a process of its own that its worker may kill (cancel, lost lease).
+
+It lays out the job's inputs (idempotently: a retry finds them there), runs or resumes the analysis with
+progress reported to the queue, and stores the outcome: the job's final state and, for a measurement, the
+`burn_analysis` record in the patient's record, in one transaction that only commits while the job is still
+this try's. The patient's healing track is then brought up to date.
+"""
+
+from __future__ import annotations
+
+import base64
+import datetime as dt
+import logging
+import os
+import time
+from pathlib import Path
+
+import msgspec
+
+from gateway.jobs import folders
+from gateway.jobs.queue import Claim, JobQueue
+from gateway.jobs.timeline import update_track
+from gateway.storage import audit
+from gateway.storage import records as store
+from gateway.storage.blobs import MediaStore, media_root
+from gateway.storage.database import Database
+from processing.analysis.pipeline import Patient
+from processing.analysis.pipeline import run as analyze
+from processing.reconstruction.artifacts import write_json
+from schemas.analysis import AnalysisResult, AnalysisStatus
+from schemas.base import iso, utcnow
+from schemas.config import Config
+from schemas.jobs import BurnAnalysis, JobInputs, JobState
+from schemas.reconstruction import RulerMark, RulerPoints
+from schemas.records import RecordKind
+
+log = logging.getLogger("burnedge.jobs")
+
+STAGES = {  # stage: (share of the work done when it starts, share it takes, what the user sees)
+    "inputs": (0.00, 0.02, "checking the pictures"),
+    "sfm": (0.02, 0.25, "placing the pictures in 3D (structure from motion)"),
+    "scale": (0.27, 0.02, "setting the scale from the printed marker"),
+    "dense": (0.29, 0.33, "building the surface (multi-view stereo)"),
+    "mesh": (0.62, 0.13, "meshing the surface"),
+    "segment": (0.75, 0.05, "finding the burn in each picture"),
+    "surface": (0.80, 0.07, "painting the burn onto the surface"),
+    "metrics": (0.87, 0.13, "measuring area, perimeter, relief and volume"),
+}
+GATEWAY_USER = "gateway"
+
+
+def run(config: Config, claim: Claim) -> JobState:
+    """Run one try of the job; returns the state it was left in."""
+    db = Database.from_config(config.gateway)
+    queue = JobQueue(db, config.jobs)
+    try:
+        row = db.connection().execute("SELECT * FROM analysis_jobs WHERE id = ?", (claim.job_id,)).fetchone()
+        inputs = msgspec.json.decode(row["request"], type=JobInputs)
+        folder = folders.job_dir(config, claim.job_id)
+        source, masks, ruler = _lay_out(config, folder, inputs)
+        patient = _patient(db, row["encounter_id"], inputs)
+        if inputs.marker_side_mm is not None:
+            config = msgspec.structs.replace(config, reconstruction=msgspec.structs.replace(
+                config.reconstruction, marker_side_mm=inputs.marker_side_mm))  # fmt: skip
+
+        def progress(stage: str) -> None:
+            start, _, text = STAGES.get(stage, (0.0, 0.0, stage))
+            queue.progress(claim, stage, start, text)
+
+        result = analyze(config, source, folder / "analysis", masks=masks, ruler=ruler, patient=patient,
+                         progress=progress)  # fmt: skip
+        state = _store(db, queue, claim, row, inputs, result)
+        if state is JobState.done:
+            try:
+                update_track(db, config, row["patient_id"])
+            except Exception:
+                log.exception("healing track of patient %s not updated", row["patient_id"])
+        return state
+    finally:
+        db.close()
+
+
+def _lay_out(config: Config, folder: Path, inputs: JobInputs) -> tuple[Path, Path | None, RulerPoints | None]:
+    store = MediaStore(media_root(config))
+    source = folder / "source"
+    source.mkdir(parents=True, exist_ok=True)
+    for picture in inputs.pictures:
+        target = source / f"{picture.asset_id}{picture.suffix}"
+        if not target.exists():
+            tmp = target.with_name(target.name + ".tmp")
+            tmp.unlink(missing_ok=True)
+            os.link(store.blob(picture.sha256), tmp)  # same file system; the blob is never modified
+            os.replace(tmp, target)
+    masks = None
+    if inputs.masks:
+        masks = folder / "masks"
+        masks.mkdir(exist_ok=True)
+        for mask in inputs.masks:
+            if mask.png_base64:
+                (masks / f"{mask.asset_id}.png").write_bytes(base64.b64decode(mask.png_base64))
+            else:
+                write_json(masks / f"{mask.asset_id}.json", {"polygons": mask.polygons})
+    ruler = None
+    if inputs.ruler is not None:
+        names = {p.asset_id: f"{p.asset_id}{p.suffix}" for p in inputs.pictures}
+        ruler = RulerPoints(distance_mm=inputs.ruler.distance_mm,
+                            marks=[RulerMark(image=names[m.asset_id], a=m.a, b=m.b) for m in inputs.ruler.marks])  # fmt: skip
+    return source, masks, ruler
+
+
+def _patient(db: Database, encounter_id: str, inputs: JobInputs) -> Patient:
+    """What the analysis may know: hours since injury (at the request), height and weight for %TBSA."""
+    conn = db.connection()
+    encounter = store.get_head(conn, RecordKind.encounter, encounter_id).data
+    patient = store.get_head(conn, RecordKind.patient, encounter["patient_id"]).data
+    hours = None
+    if encounter.get("time_of_injury") and inputs.requested_at:
+        injured = dt.datetime.fromisoformat(encounter["time_of_injury"])
+        hours = max(0.0, (dt.datetime.fromisoformat(inputs.requested_at) - injured).total_seconds() / 3600)
+    weight = encounter.get("weight_kg") or patient.get("weight_kg")
+    height = patient.get("height_cm")
+    if weight is None or height is None:
+        weight = height = None
+    return Patient(hours_since_injury=hours, height_cm=height, weight_kg=weight)
+
+
+def _store(db: Database, queue: JobQueue, claim: Claim, row, inputs: JobInputs, result: AnalysisResult) -> JobState:
+    now = iso(utcnow())
+    with db.write() as conn:
+        if result.status is AnalysisStatus.failed:
+            kept = queue.finish_in(conn, claim, JobState.failed, result_status="failed", error=result.reason,
+                                   message="no measurement: see the reason")  # fmt: skip
+            return JobState.failed if kept else JobState.running
+        if not queue.finish_in(conn, claim, JobState.done, result_status=result.status.value, error=None,
+                               message="finished"):  # fmt: skip
+            return JobState.running
+        record = BurnAnalysis(encounter_id=row["encounter_id"], job_id=claim.job_id,
+                              assets=[p.asset_id for p in inputs.pictures], requested_by=row["created_by"],
+                              requested_at=row["created_at"], completed_at=now, result=result)  # fmt: skip
+        data = msgspec.json.encode(record)
+        store.insert_version(conn, kind=RecordKind.burn_analysis, record_id=claim.job_id, version=1,
+                             parent_id=row["encounter_id"], data_json=data, created_at=None,
+                             updated_by=GATEWAY_USER, device_id=None)  # fmt: skip
+        audit.append(conn, action="analysis.store", user_id=None, device_id=None, kind=RecordKind.burn_analysis.value,
+                     record_id=claim.job_id, after_version=1,
+                     content_hash=store.version_content_hash(data.decode(), False, None))  # fmt: skip
+    log.info("analysis %s stored: %s, area %s cm2", claim.job_id, result.status.value, result.metrics.area_cm2)
+    return JobState.done
+
+
+def child_main(config: Config, claim: Claim) -> None:
+    """Entry point of the job's process: dies with its worker, records a crash of its own for a retry."""
+    _die_with_parent()
+    logging.basicConfig(level=logging.INFO, format="%(asctime)s %(levelname)s %(name)s: %(message)s")
+    started = time.perf_counter()
+    try:
+        state = run(config, claim)
+    except Exception as exc:
+        log.exception("analysis %s stopped on an unexpected error", claim.job_id)
+        db = Database.from_config(config.gateway)
+        try:
+            JobQueue(db, config.jobs).retry_or_fail(claim, f"it stopped on an unexpected error ({type(exc).__name__}:"
+                                                           f" {str(exc)[:300]})")  # fmt: skip
+        finally:
+            db.close()
+        raise SystemExit(1) from exc
+    log.info("analysis %s: %s after %.1f s", claim.job_id, state.value, time.perf_counter() - started)
+
+
+def _die_with_parent() -> None:
+    """Linux: SIGKILL this process when its worker dies, so no orphan keeps writing into the job's folder."""
+    import ctypes
+    import multiprocessing
+    import signal
+
+    try:
+        libc = ctypes.CDLL("libc.so.6", use_errno=True)
+        libc.prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
+    except OSError:
+        log.warning("cannot tie the analysis process to its worker (not Linux?)")
+    parent = multiprocessing.parent_process()
+    if parent is not None and os.getppid() != parent.pid:  # the worker died before prctl took effect
+        os._exit(1)

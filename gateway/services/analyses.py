@@ -1,0 +1,190 @@
+"""Analyses requested over the API: checking a request, queueing it once, and reading back what it gave."""
+
+from __future__ import annotations
+
+import base64
+import binascii
+import hashlib
+import json
+from pathlib import Path
+
+import cv2
+import msgspec
+import numpy as np
+
+from gateway.jobs import folders, timeline
+from gateway.jobs.queue import JobQueue
+from gateway.services.assets import AssetService
+from gateway.services.permissions import Principal, require_capture, require_read
+from gateway.services.validation import require_live_encounter
+from gateway.storage import audit
+from gateway.storage import records as store
+from gateway.storage.database import Database
+from processing.reconstruction.artifacts import code_digest
+from schemas.analysis import AnalysisResult
+from schemas.base import iso, utcnow
+from schemas.capture import Asset, AssetKind, MediaType
+from schemas.config import Config
+from schemas.errors import Conflict, InvalidInput
+from schemas.ids import uuid7
+from schemas.jobs import AnalysisJob, AnalysisRequest, BurnAnalysis, JobInputs, JobState, PictureRef
+from schemas.longitudinal import TrackResult
+from schemas.patient import EncounterMode
+from schemas.records import RecordKind
+
+SUFFIX = {MediaType.jpeg: ".jpg", MediaType.png: ".png", MediaType.heic: ".heic"}
+
+
+class AnalysisService:
+    def __init__(self, db: Database, config: Config, assets: AssetService):
+        self.db, self.config, self.assets = db, config, assets
+        self.queue = JobQueue(db, config.jobs)
+
+    def request(self, principal: Principal, encounter_id: str, body: AnalysisRequest) -> tuple[AnalysisJob, bool]:
+        """Queue an analysis of the encounter's pictures; the same request again returns the same job.
+
+        Returns the job and whether it was created now.
+        """
+        require_capture(principal)
+        with self.db.read() as conn:
+            encounter = require_live_encounter(conn, encounter_id)
+        pictures = self._pictures(principal, encounter_id, body)
+        by_id = {p.id: p for p in pictures}
+        for mask in body.masks:
+            _check_mask(mask, by_id)
+        if body.ruler is not None:
+            for mark in body.ruler.marks:
+                if mark.asset_id not in by_id:
+                    raise InvalidInput(f"ruler mark on {mark.asset_id}, which is not one of the analysed pictures")
+        refs = [PictureRef(asset_id=p.id, sha256=p.sha256, suffix=SUFFIX[p.media_type]) for p in pictures]
+        digest = _digest(self.config, refs, body)
+        mode = EncounterMode(encounter.data["mode"])
+        now = iso(utcnow())
+        inputs = JobInputs(pictures=refs, masks=body.masks, ruler=body.ruler, marker_side_mm=body.marker_side_mm,
+                           requested_at=now)  # fmt: skip
+        with self.db.write() as conn:
+            require_live_encounter(conn, encounter_id)
+            existing = conn.execute(
+                "SELECT id FROM analysis_jobs WHERE encounter_id = ? AND input_digest = ? AND state IN"
+                " ('queued', 'running', 'done')",
+                (encounter_id, digest),
+            ).fetchone()
+            if existing is not None:
+                job_id, created = existing["id"], False
+            else:
+                job_id, created = uuid7(), True
+                conn.execute(
+                    "INSERT INTO analysis_jobs (id, encounter_id, patient_id, input_digest, request, state, priority,"
+                    " max_attempts, next_attempt_at, pictures, created_at, created_by, user_id, message)"
+                    " VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?)",
+                    (job_id, encounter_id, encounter.data["patient_id"], digest, msgspec.json.encode(inputs).decode(),
+                     JobState.queued.value, 0 if mode is EncounterMode.emergency else 1, self.config.jobs.max_attempts,
+                     now, len(refs), now, principal.username, principal.user_id, "waiting for a worker"),
+                )  # fmt: skip
+                audit.append(conn, action="analysis.request", user_id=principal.user_id, device_id=principal.device_id,
+                             kind="analysis_job", record_id=job_id,
+                             detail=json.dumps({"encounter": encounter_id, "pictures": len(refs)}))  # fmt: skip
+        return self.queue.get(job_id), created
+
+    def _pictures(self, principal: Principal, encounter_id: str, body: AnalysisRequest) -> list[Asset]:
+        stored = self.assets.for_encounter(principal, encounter_id)
+        pending = [a.filename for a in stored if a.kind is AssetKind.video and not _frames_done(self.db, a.id)]
+        if body.assets is None:
+            if pending:
+                raise Conflict(f"frames are still being taken from {', '.join(pending)}: ask again in a minute")
+            chosen = [a for a in stored if a.kind in (AssetKind.photo, AssetKind.frame)]
+        else:
+            by_id = {a.id: a for a in stored}
+            missing = [i for i in body.assets if i not in by_id]
+            if missing:
+                raise InvalidInput(f"not pictures of this encounter: {', '.join(missing)}")
+            chosen = [by_id[i] for i in dict.fromkeys(body.assets)]
+            videos = [a.filename for a in chosen if a.kind is AssetKind.video]
+            if videos:
+                raise InvalidInput(f"{', '.join(videos)}: give the frames taken from a video, not the video")
+        minimum = self.config.reconstruction.min_views
+        if len(chosen) < minimum:
+            raise InvalidInput(f"{len(chosen)} pictures: a 3D analysis needs at least {minimum} (the capture "
+                               "readiness check says what is missing)")  # fmt: skip
+        return chosen
+
+    def get(self, principal: Principal, job_id: str) -> AnalysisJob:
+        require_read(principal, RecordKind.burn_analysis)
+        return self.queue.get(job_id)
+
+    def for_encounter(self, principal: Principal, encounter_id: str) -> list[AnalysisJob]:
+        require_read(principal, RecordKind.burn_analysis)
+        store.get_head(self.db.connection(), RecordKind.encounter, encounter_id)
+        return self.queue.for_encounter(encounter_id)
+
+    def cancel(self, principal: Principal, job_id: str) -> AnalysisJob:
+        require_capture(principal)
+        state = self.queue.cancel(job_id)
+        with self.db.write() as conn:
+            audit.append(conn, action="analysis.cancel", user_id=principal.user_id, device_id=principal.device_id,
+                         kind="analysis_job", record_id=job_id, detail=state.value)  # fmt: skip
+        return self.queue.get(job_id)
+
+    def result(self, principal: Principal, job_id: str) -> AnalysisResult:
+        """The measurement (from the patient's record), or the reason a finished analysis gave none."""
+        job = self.get(principal, job_id)
+        record = store.find_head(self.db.connection(), RecordKind.burn_analysis, job_id)
+        if record is not None:
+            return msgspec.convert(record.data, BurnAnalysis).result
+        path = folders.analysis_dir(self.config, job_id) / "analysis.json"
+        if job.state is JobState.failed and path.exists():
+            return msgspec.json.decode(path.read_bytes(), type=AnalysisResult)
+        if job.state is JobState.failed:
+            raise Conflict(f"the analysis failed without a result: {job.error}")
+        raise Conflict(f"the analysis is {job.state.value} ({job.message}); its result is not there yet")
+
+    def artifacts(self, principal: Principal, job_id: str) -> list[str]:
+        self.get(principal, job_id)
+        return folders.artifacts(self.config, job_id)
+
+    def artifact(self, principal: Principal, job_id: str, name: str) -> Path:
+        self.get(principal, job_id)
+        return folders.artifact_file(self.config, job_id, name)
+
+    def healing(self, principal: Principal, patient_id: str) -> TrackResult:
+        require_read(principal, RecordKind.burn_analysis)
+        store.get_head(self.db.connection(), RecordKind.patient, patient_id)
+        return timeline.read_track(self.config, patient_id)
+
+
+def _frames_done(db: Database, video_id: str) -> bool:
+    row = db.connection().execute("SELECT frames_done_at FROM assets WHERE id = ?", (video_id,)).fetchone()
+    return row is not None and row["frames_done_at"] is not None
+
+
+def _check_mask(mask, pictures: dict[str, Asset]) -> None:
+    asset = pictures.get(mask.asset_id)
+    if asset is None:
+        raise InvalidInput(f"mask for {mask.asset_id}, which is not one of the analysed pictures")
+    if (mask.png_base64 is None) == (mask.polygons is None):
+        raise InvalidInput(f"mask for {mask.asset_id}: give either png_base64 or polygons")
+    if mask.png_base64 is None:
+        return
+    try:
+        data = base64.b64decode(mask.png_base64, validate=True)
+    except (ValueError, binascii.Error) as exc:
+        raise InvalidInput(f"mask for {mask.asset_id}: png_base64 is not base64") from exc
+    image = (
+        cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_GRAYSCALE) if data[:8] == b"\x89PNG\r\n\x1a\n" else None
+    )
+    if image is None:
+        raise InvalidInput(f"mask for {mask.asset_id}: not a PNG image")
+    size = (asset.verdict.figures.width, asset.verdict.figures.height) if asset.verdict and asset.verdict.figures \
+        else None  # fmt: skip
+    if size is not None and (image.shape[1], image.shape[0]) != size:
+        raise InvalidInput(f"mask for {mask.asset_id} is {image.shape[1]}x{image.shape[0]} but the picture is "
+                           f"{size[0]}x{size[1]}: draw it on the picture as stored")  # fmt: skip
+
+
+def _digest(config: Config, refs: list[PictureRef], body: AnalysisRequest) -> str:
+    """What makes two requests the same analysis: the pictures' bytes, masks, ruler, settings and code."""
+    settings = [msgspec.to_builtins(config.quality), msgspec.to_builtins(config.reconstruction),
+                msgspec.to_builtins(msgspec.structs.replace(config.analysis, threads=1))]  # fmt: skip
+    parts = [sorted(r.sha256 for r in refs), msgspec.to_builtins(body.masks), msgspec.to_builtins(body.ruler),
+             body.marker_side_mm, settings, code_digest()]  # fmt: skip
+    return hashlib.sha256(json.dumps(parts, sort_keys=True).encode()).hexdigest()

@@ -1,0 +1,149 @@
+"""Analyses on the gateway: the request a phone sends, the queued job it becomes, and the stored result.
+
+A job moves queued -> running -> done | failed | cancelled. A running job is held by one worker under a
+lease it renews; a worker that dies loses the lease and the job is queued again, to resume from its last
+finished stage.
+"""
+
+from __future__ import annotations
+
+import enum
+from typing import Annotated
+
+import msgspec
+
+from schemas.analysis import AnalysisResult
+from schemas.base import Frozen, Id, ShortText
+
+Pixel = Annotated[list[float], msgspec.Meta(min_length=2, max_length=2)]
+
+
+class JobState(enum.StrEnum):
+    queued = "queued"
+    """Waiting for a worker (also after a retry was scheduled: see next_attempt_at)."""
+    running = "running"
+    done = "done"
+    """The analysis finished and its result is stored (its status may still be 'unscaled')."""
+    failed = "failed"
+    """No result: `error` says why and what to do."""
+    cancelled = "cancelled"
+
+
+FINISHED = frozenset({JobState.done, JobState.failed, JobState.cancelled})
+
+
+class MaskInput(Frozen):
+    """A clinician's burn mask or outline for one picture; it replaces the model's for that picture."""
+
+    asset_id: Id
+    """The photo or frame it was drawn on."""
+    png_base64: str | None = None
+    """8-bit PNG, white (>= 128) = burn, the size of the picture as stored."""
+    polygons: list[Annotated[list[Pixel], msgspec.Meta(min_length=3)]] | None = None
+    """Outline(s) as [[x, y], ...] in pixels of the picture as stored; used when no PNG is given."""
+
+
+class RulerMarkInput(Frozen):
+    """The two ruler points as clicked in one picture (pixels as stored, origin top-left)."""
+
+    asset_id: Id
+    a: Pixel
+    b: Pixel
+
+
+class RulerInput(Frozen):
+    """Scale without the printed marker: two points of known distance marked in two or more pictures."""
+
+    distance_mm: Annotated[float, msgspec.Meta(gt=0, le=2000)]
+    marks: Annotated[list[RulerMarkInput], msgspec.Meta(min_length=2)]
+
+
+class AnalysisRequest(Frozen):
+    """POST /api/v1/encounters/{id}/analyses: analyse the encounter's capture set."""
+
+    assets: list[Id] | None = None
+    """Photos and frames to use; None uses every photo and frame of the encounter (the quality gate still
+    leaves out unusable ones)."""
+    masks: list[MaskInput] = msgspec.field(default_factory=list)
+    ruler: RulerInput | None = None
+    marker_side_mm: Annotated[float, msgspec.Meta(gt=0, le=500)] | None = None
+    """Printed side of each marker square when it is not the configured one (20 mm by default)."""
+
+
+class AnalysisJob(Frozen):
+    """An analysis request as the queue holds it (GET /api/v1/analyses/{id})."""
+
+    id: str
+    encounter_id: str
+    patient_id: str
+    state: JobState
+    priority: int
+    """0 for emergency encounters, 1 for consultations: lower runs first, then oldest first."""
+    stage: str = ""
+    """The stage running or last finished: inputs, sfm, scale, dense, mesh, segment, surface, metrics."""
+    fraction: float = 0.0
+    """Share of the work done, 0..1 (by the stages' typical durations)."""
+    message: str = ""
+    """What is happening, for the person waiting."""
+    attempts: int = 0
+    """Tries started so far (a worker that died counts as one)."""
+    max_attempts: int = 3
+    next_attempt_at: str | None = None
+    """When a queued retry may start."""
+    error: str | None = None
+    """Why the job failed, or why the last try did."""
+    cancel_requested: bool = False
+    pictures: int = 0
+    created_at: str = ""
+    created_by: ShortText = ""
+    started_at: str | None = None
+    finished_at: str | None = None
+    queue_position: int | None = None
+    """1 = next to run; None unless queued."""
+    result_status: str | None = None
+    """Once done: 'ok' (measured in mm and cm) or 'unscaled'; 'failed' when the capture could not be measured."""
+
+
+class JobEvent(Frozen):
+    """One server-sent event of GET /api/v1/analyses/{id}/events (event type 'progress', then 'end')."""
+
+    id: str
+    state: JobState
+    stage: str
+    fraction: float
+    message: str
+    error: str | None = None
+    result_status: str | None = None
+
+
+class BurnAnalysis(Frozen):
+    """The `burn_analysis` record: a finished analysis in the patient's record (written by the gateway only)."""
+
+    encounter_id: Id
+    job_id: str
+    assets: list[str]
+    """The photos and frames it was asked to use."""
+    requested_by: ShortText
+    requested_at: str
+    completed_at: str
+    result: AnalysisResult
+    """The measurement with its confidence, scale, provenance and notes; decision support only."""
+
+
+class PictureRef(Frozen):
+    """A picture of a job, as the gateway stores it."""
+
+    asset_id: str
+    sha256: str
+    suffix: str
+    """File suffix for its media type (.jpg, .png, .heic)."""
+
+
+class JobInputs(Frozen):
+    """What a job analyses (the `request` column of analysis_jobs): the request with its pictures resolved."""
+
+    pictures: list[PictureRef]
+    masks: list[MaskInput] = msgspec.field(default_factory=list)
+    ruler: RulerInput | None = None
+    marker_side_mm: float | None = None
+    requested_at: str = ""

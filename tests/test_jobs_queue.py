@@ -1,0 +1,138 @@
+"""The durable analysis queue on a real SQLite file: order, leases, retries, cancelling, exactly-once finishing."""
+
+from __future__ import annotations
+
+import time
+
+import msgspec
+import pytest
+
+from gateway.jobs.queue import Claim, JobQueue
+from gateway.storage.database import Database
+from schemas.base import iso, utcnow
+from schemas.config import JobsConfig
+from schemas.errors import Conflict, NotFound
+from schemas.ids import uuid7
+from schemas.jobs import JobInputs, JobState
+
+FAST = JobsConfig(lease_s=0.6, heartbeat_s=0.2, retry_base_s=0.0, max_attempts=2)
+
+
+@pytest.fixture
+def queue(tmp_path) -> JobQueue:
+    db = Database(tmp_path / "q.sqlite3")
+    db.migrate()
+    yield JobQueue(db, FAST)
+    db.close()
+
+
+def enqueue(queue: JobQueue, priority: int, encounter: str | None = None) -> str:
+    """A job row as the analysis service writes it (the service itself is tested through the API)."""
+    job_id, now = uuid7(), iso(utcnow())
+    with queue.db.write() as conn:
+        conn.execute(
+            "INSERT INTO analysis_jobs (id, encounter_id, patient_id, input_digest, request, state, priority,"
+            " max_attempts, next_attempt_at, pictures, created_at, created_by, user_id) VALUES"
+            " (?,?,?,?,?,'queued',?,?,?,6,?,'dr','u1')",
+            (job_id, encounter or uuid7(), "p1", job_id, msgspec.json.encode(JobInputs(pictures=[])).decode(),
+             priority, queue.conf.max_attempts, now, now),
+        )  # fmt: skip
+    time.sleep(0.002)  # distinct created_at
+    return job_id
+
+
+def test_emergencies_run_first_then_the_oldest(queue):
+    consult_old = enqueue(queue, 1)
+    emergency = enqueue(queue, 0)
+    consult_new = enqueue(queue, 1)
+    assert queue.get(consult_old).queue_position == 2 and queue.get(emergency).queue_position == 1
+    order = [queue.claim("w").job_id for _ in range(3)]
+    assert order == [emergency, consult_old, consult_new]
+    assert queue.claim("w") is None
+    assert queue.get(emergency).state is JobState.running and queue.get(emergency).queue_position is None
+
+
+def test_a_dead_workers_job_is_queued_again_then_fails_with_the_reason(queue):
+    job = enqueue(queue, 1)
+    first = queue.claim("worker-a")
+    assert first.attempt == 1
+    time.sleep(0.7)  # no heartbeat: worker-a died
+    second = queue.claim("worker-b")
+    assert second is not None and second.job_id == job and second.attempt == 2
+    assert queue.heartbeat(first).owned is False  # the dead worker's lease is gone for good
+    assert not queue.progress(first, "dense", 0.3, "late") and queue.get(job).stage == ""
+    time.sleep(0.7)
+    assert queue.reap() == 1
+    failed = queue.get(job)
+    assert failed.state is JobState.failed and failed.attempts == 2
+    assert "failed 2 times" in failed.error and "killed, power cut or out of memory" in failed.error
+
+
+def test_a_renewed_lease_is_kept(queue):
+    enqueue(queue, 1)
+    claim = queue.claim("w")
+    for _ in range(5):
+        time.sleep(0.2)
+        assert queue.heartbeat(claim).owned
+    assert queue.reap() == 0 and queue.claim("other") is None
+
+
+def test_a_crash_is_retried_after_a_backoff(tmp_path):
+    db = Database(tmp_path / "q.sqlite3")
+    db.migrate()
+    queue = JobQueue(db, msgspec.structs.replace(FAST, retry_base_s=30.0, max_attempts=3))
+    job = enqueue(queue, 1)
+    claim = queue.claim("w")
+    assert queue.retry_or_fail(claim, "it stopped on an unexpected error (boom)") is JobState.queued
+    waiting = queue.get(job)
+    assert waiting.state is JobState.queued and "boom" in waiting.error
+    assert waiting.next_attempt_at > iso(utcnow()) and queue.claim("w") is None  # not before the backoff
+    assert 30 <= queue.backoff_s(1) <= 36 and 60 <= queue.backoff_s(2) <= 72 and queue.backoff_s(30) <= 900 * 1.2
+    db.close()
+
+
+def test_finishing_needs_the_lease_so_a_result_is_stored_once(queue):
+    job = enqueue(queue, 1)
+    stale = queue.claim("a")
+    time.sleep(0.7)
+    fresh = queue.claim("b")
+    with queue.db.write() as conn:
+        assert queue.finish_in(conn, stale, JobState.done, result_status="ok", error=None, message="x") is False
+    with queue.db.write() as conn:
+        assert queue.finish_in(conn, fresh, JobState.done, result_status="ok", error=None, message="finished")
+    with queue.db.write() as conn:
+        assert queue.finish_in(conn, fresh, JobState.done, result_status="ok", error=None, message="again") is False
+    done = queue.get(job)
+    assert done.state is JobState.done and done.fraction == 1.0 and done.message == "finished"
+
+
+def test_cancel_a_queued_job_at_once_and_a_running_one_at_its_next_heartbeat(queue):
+    queued, running = enqueue(queue, 1), enqueue(queue, 0)
+    claim = queue.claim("w")
+    assert claim.job_id == running
+    assert queue.cancel(queued) is JobState.cancelled and queue.get(queued).state is JobState.cancelled
+    assert queue.claim("w") is None  # a cancelled job is never picked up
+    assert queue.cancel(running) is JobState.running
+    beat = queue.heartbeat(claim)
+    assert beat.owned and beat.cancel
+    assert queue.finish(claim, JobState.cancelled, error=None, message="cancelled")
+    assert queue.cancel(running) is JobState.cancelled  # cancelling twice is harmless
+    with pytest.raises(NotFound):
+        queue.cancel(uuid7())
+
+
+def test_a_finished_job_cannot_be_cancelled(queue):
+    enqueue(queue, 1)
+    claim = queue.claim("w")
+    queue.finish(claim, JobState.failed, error="no", message="failed")
+    with pytest.raises(Conflict, match="already failed"):
+        queue.cancel(claim.job_id)
+
+
+def test_a_stopping_worker_hands_its_job_back_without_using_a_try(queue):
+    job = enqueue(queue, 1)
+    claim = queue.claim("w")
+    queue.release(claim)
+    back = queue.get(job)
+    assert back.state is JobState.queued and back.attempts == 0
+    assert queue.claim("w2") == Claim(job, "w2", 1)
