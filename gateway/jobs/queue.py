@@ -33,10 +33,12 @@ class Claim:
 
 @dataclass(frozen=True)
 class Beat:
-    """What a heartbeat learned: whether the worker still holds the job, and whether it was cancelled."""
+    """What a heartbeat learned: whether the worker still holds the job, whether it was cancelled, and whether it
+    is finished (its process may still be bringing the patient's healing track up to date)."""
 
     owned: bool
     cancel: bool
+    finished: bool = False
 
 
 def _now() -> dt.datetime:
@@ -80,11 +82,10 @@ class JobQueue:
     def heartbeat(self, claim: Claim) -> Beat:
         with self.db.write() as conn:
             row = conn.execute(
-                "SELECT cancel_requested FROM analysis_jobs WHERE id = ? AND state = 'running' AND lease_owner = ?",
-                (claim.job_id, claim.owner),
+                "SELECT state, lease_owner, cancel_requested FROM analysis_jobs WHERE id = ?", (claim.job_id,)
             ).fetchone()
-            if row is None:
-                return Beat(owned=False, cancel=False)
+            if row is None or row["state"] != JobState.running or row["lease_owner"] != claim.owner:
+                return Beat(owned=False, cancel=False, finished=row is not None and JobState(row["state"]) in FINISHED)
             expires = _at(_now() + dt.timedelta(seconds=self.conf.lease_s))
             conn.execute("UPDATE analysis_jobs SET lease_expires_at = ? WHERE id = ?", (expires, claim.job_id))
             return Beat(owned=True, cancel=bool(row["cancel_requested"]))

@@ -72,6 +72,7 @@ class Worker:
         child.start()
         beat_every = self.config.jobs.heartbeat_s
         next_beat = time.monotonic() + beat_every
+        finished = False
         while child.is_alive():
             child.join(timeout=min(0.5, beat_every))
             if self.stopping.is_set() or self.orphaned():
@@ -79,10 +80,11 @@ class Worker:
                 if not self.orphaned():
                     self.queue.release(claim)
                 return JobState.queued
-            if time.monotonic() >= next_beat and child.is_alive():
+            if time.monotonic() >= next_beat and child.is_alive() and not finished:
                 beat = self.queue.heartbeat(claim)
                 next_beat = time.monotonic() + beat_every
-                if not beat.owned:
+                finished = beat.finished  # stored: the process only updates the healing track now; let it
+                if not beat.owned and not finished:
                     log.warning("analysis %s: lease lost to another worker; stopping this try", claim.job_id)
                     _kill(child)
                     return JobState.running
