@@ -48,9 +48,45 @@ def cmd_demo(args: argparse.Namespace) -> int:
     from gateway.server import serve
 
     config = demo_config(_config(args))
-    print(seed_demo(config), flush=True)
-    if not args.no_serve:
-        serve(config)
+    summary, passwords = seed_demo(config)
+    print(summary, flush=True)
+    if args.no_series:
+        if not args.exit:
+            serve(config)
+        return 0
+    from gateway.demo_series import SeriesOptions, run_demo
+
+    width, height = _size(args.size)
+    folder = Path(args.phantoms) if args.phantoms else Path(config.gateway.database).resolve().parent / \
+        "burnedge-demo-phantoms"  # fmt: skip
+    options = SeriesOptions(folder=folder, views=args.views, width=width, height=height,
+                            clinician_masks=args.clinician_masks)  # fmt: skip
+    run_demo(config, options, passwords["clinician"], keep_serving=not args.exit)
+    return 0
+
+
+def _size(text: str) -> tuple[int, int]:
+    try:
+        width, height = (int(v) for v in text.lower().split("x"))
+    except ValueError as exc:
+        raise InvalidInput(f"--size {text}: give WIDTHxHEIGHT, e.g. 1280x960") from exc
+    if not (320 <= width <= 8192 and 240 <= height <= 8192):
+        raise InvalidInput(f"--size {text}: from 320x240 to 8192x8192")
+    return width, height
+
+
+def cmd_worker(args: argparse.Namespace) -> int:
+    from gateway.jobs.worker import main as worker_main
+    from gateway.storage.database import Database
+
+    config = _config(args)
+    db = Database.from_config(config.gateway)
+    try:
+        db.migrate()
+    finally:
+        db.close()
+    ran = worker_main(config, supervised=False, drain=args.drain)
+    log.info("worker stopped after %d analyses", ran)
     return 0
 
 
@@ -186,11 +222,23 @@ def build_parser() -> argparse.ArgumentParser:
     serve.add_argument("--port", type=int, help="TCP port")
     serve.set_defaults(func=cmd_serve)
 
-    demo = sub.add_parser("demo", help="seed a demo patient and accounts, then serve the gateway")
+    demo = sub.add_parser("demo", help="the whole system on this machine: demo patients, a 4-visit burn series "
+                                       "uploaded, analysed and aligned through the real gateway, then serve it")  # fmt: skip
     demo.add_argument("--host", help="address to listen on")
     demo.add_argument("--port", type=int, help="TCP port")
-    demo.add_argument("--no-serve", action="store_true", help="seed and check, then exit instead of serving")
+    demo.add_argument("--exit", "--no-serve", dest="exit", action="store_true",
+                      help="exit after the summary instead of leaving the gateway running")  # fmt: skip
+    demo.add_argument("--no-series", action="store_true", help="seed the records only; no phantom series or analyses")
+    demo.add_argument("--views", type=int, default=8, help="photos per visit, 6-20 (default 8)")
+    demo.add_argument("--size", default="1280x960", help="photo size WIDTHxHEIGHT (default 1280x960)")
+    demo.add_argument("--phantoms", metavar="DIR", help="where the rendered series is kept (burnedge-demo-phantoms)")
+    demo.add_argument("--clinician-masks", action="store_true",
+                      help="send the phantom's exact burn masks as a clinician's instead of using the model")  # fmt: skip
     demo.set_defaults(func=cmd_demo)
+
+    worker = sub.add_parser("worker", help="run queued analyses (beside a gateway started with [jobs] workers = 0)")
+    worker.add_argument("--drain", action="store_true", help="exit once no queued analysis is ready to run")
+    worker.set_defaults(func=cmd_worker)
 
     gate = sub.add_parser("gate", help="quality verdicts for photos, as JSON (no server needed)")
     gate.add_argument("files", nargs="+", metavar="FILE", help="JPEG, PNG or HEIC photos")

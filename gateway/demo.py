@@ -106,8 +106,8 @@ def demo_config(config: Config) -> Config:
     )
 
 
-def seed_demo(config: Config) -> str:
-    """Seed accounts and the demo patient (idempotent); return the summary to show."""
+def seed_demo(config: Config) -> tuple[str, dict[str, str]]:
+    """Seed accounts and the demo patient (idempotent); return the summary to show and the accounts' passwords."""
     db_path = Path(config.gateway.database).resolve()
     db = Database.from_config(config.gateway)
     try:
@@ -115,7 +115,7 @@ def seed_demo(config: Config) -> str:
         services = Services.build(config, db)
         passwords = seed_accounts(services, db_path.with_suffix(".credentials"))
         seed_patient(services)
-        return _summary(services, config, passwords, db_path)
+        return _summary(services, config, passwords, db_path), passwords
     finally:
         db.close()
 

@@ -68,7 +68,7 @@ def test_users_add_rejects_a_short_password(tmp_path):
 
 def test_demo_seeds_a_patient_with_calculated_results_and_is_idempotent(tmp_path):
     db = tmp_path / "demo.sqlite3"
-    args = [sys.executable, "-m", "gateway.cli", "--db", str(db), "demo", "--no-serve"]
+    args = [sys.executable, "-m", "gateway.cli", "--db", str(db), "demo", "--no-series", "--exit"]
     env = {
         "BURNEDGE_SECURITY_ARGON2_MEMORY_KIB": "8",
         "BURNEDGE_SECURITY_ARGON2_TIME_COST": "1",

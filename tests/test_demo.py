@@ -1,0 +1,36 @@
+"""The README's main command, `burnedge demo`, on a small series: everything through the real gateway."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+from tests.conftest import FAST_HASH_ENV, REPO, free_port
+
+
+def test_the_demo_uploads_analyses_and_aligns_four_visits_then_exits(tmp_path):
+    db = tmp_path / "demo.sqlite3"
+    args = [sys.executable, "-m", "gateway.cli", "--db", str(db), "demo", "--exit", "--port", str(free_port()),
+            "--views", "6", "--size", "960x720", "--clinician-masks", "--phantoms", str(tmp_path / "phantoms")]  # fmt: skip
+    env = {**FAST_HASH_ENV, "PATH": "", "BURNEDGE_JOBS_POLL_S": "0.3", "BURNEDGE_JOBS_NICE": "0"}
+    run = subprocess.run(args, capture_output=True, text=True, cwd=REPO, env=env, timeout=900)
+    assert run.returncode == 0, run.stderr[-4000:]
+    out = run.stdout
+    assert "%TBSA" in out and "Healing trend:" in out and "Decision support only" in out
+    for day in (0, 7, 14, 21):
+        assert f"day {day}" in out
+        assert f"day {day:>2} [" in run.stderr  # a progress bar per visit
+    track_line = next(line for line in out.splitlines() if line.startswith("Healing track: "))
+    track = json.loads(open(track_line.split()[2]).read())
+    truth = json.loads((tmp_path / "phantoms" / "ground_truth.json").read_text())
+    assert [s["day"] for s in track["sessions"]] == [0, 7, 14, 21]
+    for session, true in zip(track["sessions"], truth["sessions"], strict=True):
+        true_change = 100 * (true["area_ratio_vs_day0"] - 1)
+        assert session["area_change_percent"] == pytest.approx(true_change, abs=3.0), session
+    assert track["healing_rate_cm2_per_day"] > 0
+    again = subprocess.run(args, capture_output=True, text=True, cwd=REPO, env=env, timeout=300)
+    assert again.returncode == 0, again.stderr[-4000:]  # a second run reuses the series, visits and analyses
+    assert "Healing trend:" in again.stdout
