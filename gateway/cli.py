@@ -299,6 +299,9 @@ def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     logging.basicConfig(level=logging.DEBUG if args.verbose else logging.INFO,
                         format="%(asctime)s %(levelname)s %(name)s: %(message)s")  # fmt: skip
+    if not args.verbose:  # every scheduler tick and every HTTP request of the demo's client would be logged
+        for chatty in ("apscheduler", "httpx"):
+            logging.getLogger(chatty).setLevel(logging.WARNING)
     try:
         return args.func(args)
     except BurnedgeError as exc:

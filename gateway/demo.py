@@ -98,12 +98,16 @@ def seed_patient(services: Services) -> None:
 
 
 def demo_config(config: Config) -> Config:
-    """The demo keeps its own database unless one was named."""
-    if config.gateway.database != Config().gateway.database:
-        return config
-    return msgspec.structs.replace(
-        config, gateway=msgspec.structs.replace(config.gateway, database="burnedge-demo.sqlite3")
-    )
+    """The demo keeps its own database unless one was named, and its workers' output in a log beside it (the
+    terminal shows the progress bars)."""
+    if config.gateway.database == Config().gateway.database:
+        config = msgspec.structs.replace(
+            config, gateway=msgspec.structs.replace(config.gateway, database="burnedge-demo.sqlite3")
+        )
+    if not config.jobs.log_file:
+        log_file = str(Path(config.gateway.database).resolve().with_suffix(".worker.log"))
+        config = msgspec.structs.replace(config, jobs=msgspec.structs.replace(config.jobs, log_file=log_file))
+    return config
 
 
 def seed_demo(config: Config) -> tuple[str, dict[str, str]]:

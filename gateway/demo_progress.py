@@ -58,7 +58,7 @@ def summary_table(track: dict, jobs: list[dict], results: list[dict]) -> str:
         conf = result.get("confidence") or {}
         s = sessions[i] if i < len(sessions) else {}
         rows.append((
-            f"day {s.get('day', '?'):g}" if isinstance(s.get("day"), (int, float)) else f"#{i + 1}",
+            f"day {s['day']:.0f}" if isinstance(s.get("day"), (int, float)) else f"#{i + 1}",
             _fmt(m.get("area_cm2")), _fmt(m.get("perimeter_cm")), _fmt(m.get("relief_max_mm")),
             _fmt(m.get("volume_cm3"), ".3f"),
             f"{conf.get('level', '-')} {conf.get('score', 0):.2f}" if conf else result.get("status", "-"),
@@ -78,9 +78,12 @@ def summary_table(track: dict, jobs: list[dict], results: list[dict]) -> str:
     if closure is not None:
         extra = f" (95 % range day {spread[0]:.0f} to {spread[1]:.0f})" if spread else ""
         lines.append(f"Projected closure: day {closure:.0f} after the first visit{extra}")
+    lines.append("Review prompts (decision support, for the clinician):")
     for flag in track.get("stall_flags", []):
-        status = "TRIGGERED" if flag.get("triggered") else ("not yet evaluable" if not flag.get("evaluable") else "ok")
-        lines.append(f"  [{status}] {flag.get('rule')} ({flag.get('citation')})")
+        status = "REVIEW" if flag.get("triggered") else ("ok" if flag.get("evaluable") else "n/a")
+        lines.append(f"  [{status}] {flag.get('rule')}: {flag.get('detail')}")
+        if flag.get("triggered"):
+            lines.append(f"           source: {flag.get('citation')}")
     for note in track.get("notes", []):
         lines.append(f"  note: {note}")
     return "\n".join(lines)

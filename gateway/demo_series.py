@@ -201,6 +201,7 @@ def run_demo(config: Config, options: SeriesOptions, password: str, *, keep_serv
             "Painted burn meshes (GLB; open in any glTF viewer) and every file of each analysis:", *files,
             f"Healing track: {patient_dir(config, SERIES_PATIENT_ID) / 'track.json'}"
             f"  ({gateway.url}/api/v1/patients/{SERIES_PATIENT_ID}/healing)",
+            f"The analyses' log (COLMAP and the workers): {config.jobs.log_file or 'the output above'}",
             "Decision support only: a clinician confirms every figure. Surface relief is geometry, not burn depth.",
         ])  # fmt: skip
         print(text, flush=True)

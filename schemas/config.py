@@ -263,6 +263,8 @@ class JobsConfig(Message):
     One suits a 2-core mini-PC: a reconstruction keeps both cores busy."""
     nice: Annotated[int, msgspec.Meta(ge=0, le=19)] = 10
     """Niceness added to workers, so the API answers first while a reconstruction runs."""
+    log_file: str = ""
+    """Workers and their analyses write their output here (COLMAP's included); empty: to the gateway's output."""
     work_dir: str = ""
     """Folder of the analyses' work folders; empty means "burnedge-analyses" beside the database."""
     lease_s: Annotated[float, msgspec.Meta(gt=0)] = 60.0
@@ -272,6 +274,9 @@ class JobsConfig(Message):
     """How often a worker renews its lease and looks for a cancel request."""
     poll_s: Annotated[float, msgspec.Meta(gt=0)] = 2.0
     """How often an idle worker looks for a queued job."""
+    max_run_s: Annotated[float, msgspec.Meta(gt=0)] = 3 * 3600.0
+    """A try still running after this long is taken as hung (a native library stuck): it is stopped and retried,
+    so one stuck analysis cannot hold the queue (a 12-view analysis takes about 2 minutes on 2 cores)."""
     max_attempts: Annotated[int, msgspec.Meta(ge=1, le=20)] = 3
     """Tries of a job that crashed or whose worker died before it is marked failed (with the last reason)."""
     retry_base_s: Annotated[float, msgspec.Meta(ge=0)] = 30.0

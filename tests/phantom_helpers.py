@@ -8,6 +8,18 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+SMALL = {"views": 8, "width": 960, "height": 720}
+"""A small multi-view set: about 20 s per analysis on two cores."""
+
+
+def render_small_patch(out: Path) -> Path:
+    """The phantom the analysis tests share: a patch with a 16 cm2, 2.5 mm deep burn, SMALL views."""
+    from processing.phantom.generate import run as render_phantom  # native libraries: only where used
+    from schemas.phantom import PhantomShape, PhantomSpec
+
+    render_phantom(PhantomSpec(shape=PhantomShape.patch, seed=12, area_cm2=16.0, depth_mm=2.5, **SMALL), out)
+    return out
+
 
 def hide_marker(phantom: Path, images: Path) -> None:
     """Paint over the marker strip in every picture, as if none had been laid down."""

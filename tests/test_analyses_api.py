@@ -12,6 +12,7 @@ import pytest
 
 from gateway.demo_client import GatewayClient, GatewayError
 from processing.phantom.generate import run as render_phantom
+from schemas.errors import NotFound
 from schemas.phantom import PhantomShape, PhantomSpec
 from tests.conftest import encounter_body, patient_body
 
@@ -108,7 +109,7 @@ def test_requests_that_cannot_give_an_analysis_are_refused_with_the_reason(visit
     assert phone.get(f"/api/v1/encounters/{enc}/analyses", "list") == []
 
 
-def test_who_may_ask_read_and_what_is_not_there(visit, client, auth):
+def test_who_may_ask_read_and_what_is_not_there(visit, client, auth, services):
     phone, enc, _ = visit
     consultant = client.post(f"/api/v1/encounters/{enc}/analyses", json={}, headers=auth["consultant"])
     assert consultant.status_code == 403
@@ -119,6 +120,16 @@ def test_who_may_ask_read_and_what_is_not_there(visit, client, auth):
     assert phone.http.get("/api/v1/analyses/0192f3b4-6a8e-7c3d-9b1a-000000000000").status_code == 404
     missing = phone.http.post("/api/v1/encounters/0192f3b4-6a8e-7c3d-9b1a-000000000000/analyses", json={})
     assert missing.status_code == 404
-    assert phone.http.get(f"/api/v1/analyses/{job['id']}/artifacts/../../gateway.sqlite3").status_code == 404
+    from gateway.jobs.folders import artifact_file
+
+    (folders_root := Path(services.config.gateway.database).parent / "burnedge-analyses" / job["id"]).mkdir(
+        parents=True
+    )
+    (folders_root / "analysis").mkdir()
+    for escape in ("../../gateway.sqlite3", "../request.json", "/etc/passwd", "analysis.json"):
+        with pytest.raises(NotFound):
+            artifact_file(services.config, job["id"], escape)
+    r = phone.http.get(f"/api/v1/analyses/{job['id']}/artifacts/%2e%2e%2f%2e%2e%2fgateway.sqlite3")
+    assert r.status_code == 404
     with pytest.raises(GatewayError, match="no measured visit yet"):
         phone.get(f"/api/v1/patients/{job['patient_id']}/healing", "healing")

@@ -17,18 +17,14 @@ import trimesh
 from processing.analysis import confidence, segment_views
 from processing.analysis.pipeline import Patient
 from processing.analysis.pipeline import run as analyze
-from processing.phantom.generate import run as render_phantom
 from processing.segmentation.infer import SHIPPED_MODEL, Box, BurnSegmenter
 from schemas.analysis import AnalysisResult, AnalysisStatus
 from schemas.config import AnalysisConfig, Config
 from schemas.errors import InvalidInput
-from schemas.phantom import PhantomShape, PhantomSpec
 from schemas.reconstruction import FailureCode
 from schemas.segmentation import MaskSource
 from tests.conftest import REPO
-from tests.phantom_helpers import hide_marker
-
-SMALL = {"views": 8, "width": 960, "height": 720}
+from tests.phantom_helpers import SMALL, hide_marker, render_small_patch
 
 
 def cli(*args: str) -> subprocess.CompletedProcess:
@@ -38,9 +34,7 @@ def cli(*args: str) -> subprocess.CompletedProcess:
 
 @pytest.fixture(scope="module")
 def phantom(tmp_path_factory) -> Path:
-    out = tmp_path_factory.mktemp("phantom")
-    render_phantom(PhantomSpec(shape=PhantomShape.patch, seed=12, area_cm2=16.0, depth_mm=2.5, **SMALL), out)
-    return out
+    return render_small_patch(tmp_path_factory.mktemp("phantom"))
 
 
 @pytest.fixture(scope="module")

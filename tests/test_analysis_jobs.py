@@ -12,11 +12,9 @@ from pathlib import Path
 import pytest
 
 from gateway.demo_client import GatewayClient
-from processing.phantom.generate import run as render_phantom
-from schemas.phantom import PhantomShape, PhantomSpec
 from tests.conftest import GatewayProcess, add_user_cli, encounter_body, free_port, login, patient_body
+from tests.phantom_helpers import SMALL, render_small_patch
 
-SMALL = {"views": 8, "width": 960, "height": 720}
 FAST_QUEUE = {"BURNEDGE_JOBS_LEASE_S": "3", "BURNEDGE_JOBS_NICE": "0", "BURNEDGE_JOBS_HEARTBEAT_S": "0.5", "BURNEDGE_JOBS_POLL_S": "0.3",
               "BURNEDGE_JOBS_REAP_EVERY_S": "1", "BURNEDGE_JOBS_RETRY_BASE_S": "0"}  # fmt: skip
 
@@ -60,9 +58,7 @@ def at_stage(phone: GatewayClient, job_id: str, stage: str, timeout_s: float = 1
 
 @pytest.fixture(scope="module")
 def phantom(tmp_path_factory) -> Path:
-    out = tmp_path_factory.mktemp("phantom")
-    render_phantom(PhantomSpec(shape=PhantomShape.patch, seed=12, area_cm2=16.0, depth_mm=2.5, **SMALL), out)
-    return out
+    return render_small_patch(tmp_path_factory.mktemp("phantom"))
 
 
 @pytest.fixture(scope="module")

@@ -136,3 +136,38 @@ def test_a_stopping_worker_hands_its_job_back_without_using_a_try(queue):
     back = queue.get(job)
     assert back.state is JobState.queued and back.attempts == 0
     assert queue.claim("w2") == Claim(job, "w2", 1)
+
+
+def test_retention_keeps_a_finished_analysis_results_and_drops_its_scratch(tmp_path):
+    from gateway.jobs.folders import artifacts, clean_up, job_dir
+    from schemas.config import Config, GatewayConfig
+
+    config = Config(gateway=GatewayConfig(database=str(tmp_path / "q.sqlite3")),
+                    jobs=JobsConfig(retention_days=1.0))  # fmt: skip
+    db = Database.from_config(config.gateway)
+    db.migrate()
+    queue = JobQueue(db, config.jobs)
+    old_done, old_failed, recent = enqueue(queue, 1), enqueue(queue, 1), enqueue(queue, 1)
+    for job_id, state in ((old_done, JobState.done), (old_failed, JobState.failed), (recent, JobState.done)):
+        claim = queue.claim("w")
+        assert claim.job_id == job_id  # same priority: oldest first
+        queue.finish(claim, state, error=None, message=state.value)
+        folder = job_dir(config, claim.job_id)
+        for name in ("source/a.jpg", "analysis/images/a.jpg", "analysis/dense/fused_points.ply",
+                     "analysis/sfm/database.db", "analysis/analysis.json", "analysis/surface/burn_surface.glb",
+                     "analysis/surface/burn_surface.npz", "analysis/mesh/surface.ply"):  # fmt: skip
+            (folder / name).parent.mkdir(parents=True, exist_ok=True)
+            (folder / name).write_bytes(b"x")
+    with db.write() as conn:
+        conn.execute("UPDATE analysis_jobs SET finished_at = '2000-01-01T00:00:00.000000+00:00' WHERE id IN (?, ?)",
+                     (old_done, old_failed))  # fmt: skip
+    assert clean_up(db, config) == 2
+    kept = job_dir(config, old_done)
+    assert not (kept / "source").exists() and not (kept / "analysis/dense").exists()
+    assert not (kept / "analysis/sfm/database.db").exists() and not (kept / "analysis/images").exists()
+    assert (kept / "analysis/surface/burn_surface.npz").exists() and (kept / "analysis/mesh/surface.ply").exists()
+    assert artifacts(config, old_done) == ["analysis.json", "mesh/surface.ply", "surface/burn_surface.glb"]
+    assert not job_dir(config, old_failed).exists()
+    assert (job_dir(config, recent) / "source/a.jpg").exists()
+    assert clean_up(db, config) == 0  # each job is cleaned once
+    db.close()

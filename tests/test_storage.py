@@ -23,8 +23,14 @@ CLINICIAN = Principal("u1", "dr.a", Role.clinician, None, "h")
 def test_migrations_are_recorded_and_applied_once(tmp_path):
     db = Database(tmp_path / "m.sqlite3")
     first = db.migrate()
-    assert first == ["m001_records", "m002_accounts", "m003_audit", "m004_uploads_and_assets", "m005_video_frames",
-                     "m006_analysis_jobs"]
+    assert first == [
+        "m001_records",
+        "m002_accounts",
+        "m003_audit",
+        "m004_uploads_and_assets",
+        "m005_video_frames",
+        "m006_analysis_jobs",
+    ]
     assert db.migrate() == []
     assert db.connection().execute("PRAGMA journal_mode").fetchone()[0] == "wal"
     assert db.connection().execute("PRAGMA synchronous").fetchone()[0] == 2  # FULL

@@ -85,7 +85,9 @@ class JobQueue:
                 "SELECT state, lease_owner, cancel_requested FROM analysis_jobs WHERE id = ?", (claim.job_id,)
             ).fetchone()
             if row is None or row["state"] != JobState.running or row["lease_owner"] != claim.owner:
-                return Beat(owned=False, cancel=False, finished=row is not None and JobState(row["state"]) in FINISHED)
+                # Only a stored result lets the process run on (it updates the healing track); a job cancelled or
+                # failed by the reaper meanwhile must be stopped.
+                return Beat(owned=False, cancel=False, finished=row is not None and row["state"] == JobState.done)
             expires = _at(_now() + dt.timedelta(seconds=self.conf.lease_s))
             conn.execute("UPDATE analysis_jobs SET lease_expires_at = ? WHERE id = ?", (expires, claim.job_id))
             return Beat(owned=True, cancel=bool(row["cancel_requested"]))

@@ -12,6 +12,8 @@ import base64
 import datetime as dt
 import logging
 import os
+import shutil
+import signal
 import time
 from pathlib import Path
 
@@ -30,6 +32,7 @@ from processing.reconstruction.artifacts import write_json
 from schemas.analysis import AnalysisResult, AnalysisStatus
 from schemas.base import iso, utcnow
 from schemas.config import Config
+from schemas.errors import BurnedgeError, StorageError
 from schemas.jobs import BurnAnalysis, JobInputs, JobState
 from schemas.reconstruction import RulerMark, RulerPoints
 from schemas.records import RecordKind
@@ -65,7 +68,10 @@ def run(config: Config, claim: Claim) -> JobState:
 
         def progress(stage: str) -> None:
             start, _, text = STAGES.get(stage, (0.0, 0.0, stage))
-            queue.progress(claim, stage, start, text)
+            try:
+                queue.progress(claim, stage, start, text)
+            except StorageError:  # progress is for people waiting; the analysis goes on without it
+                log.warning("analysis %s: progress not recorded (database busy)", claim.job_id)
 
         result = analyze(config, source, folder / "analysis", masks=masks, ruler=ruler, patient=patient,
                          progress=progress)  # fmt: skip
@@ -89,7 +95,10 @@ def _lay_out(config: Config, folder: Path, inputs: JobInputs) -> tuple[Path, Pat
         if not target.exists():
             tmp = target.with_name(target.name + ".tmp")
             tmp.unlink(missing_ok=True)
-            os.link(store.blob(picture.sha256), tmp)  # same file system; the blob is never modified
+            try:
+                os.link(store.blob(picture.sha256), tmp)  # the blob is never modified: a link is a free copy
+            except OSError:  # work_dir on another file system
+                shutil.copyfile(store.blob(picture.sha256), tmp)
             os.replace(tmp, target)
     masks = None
     if inputs.masks:
@@ -151,27 +160,44 @@ def _store(db: Database, queue: JobQueue, claim: Claim, row, inputs: JobInputs, 
 def child_main(config: Config, claim: Claim) -> None:
     """Entry point of the job's process: dies with its worker, records a crash of its own for a retry."""
     _die_with_parent()
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # its worker decides when it stops
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(levelname)s %(name)s: %(message)s")
     started = time.perf_counter()
     try:
         state = run(config, claim)
-    except Exception as exc:
-        log.exception("analysis %s stopped on an unexpected error", claim.job_id)
+    except BurnedgeError as exc:
+        if isinstance(exc, StorageError):  # the database was busy: worth another try
+            _retry(config, claim, f"the database was busy ({exc.detail})")
+            raise SystemExit(1) from exc
+        # Bad input or data: trying again would fail the same way.
+        log.error("analysis %s: %s", claim.job_id, exc.detail)
         db = Database.from_config(config.gateway)
         try:
-            JobQueue(db, config.jobs).retry_or_fail(claim, f"it stopped on an unexpected error ({type(exc).__name__}:"
-                                                           f" {str(exc)[:300]})")  # fmt: skip
+            JobQueue(db, config.jobs).finish(claim, JobState.failed, error=exc.detail, message="failed")
         finally:
             db.close()
+        return
+    except Exception as exc:
+        log.exception("analysis %s stopped on an unexpected error", claim.job_id)
+        _retry(config, claim, f"it stopped on an unexpected error ({type(exc).__name__}: {str(exc)[:300]})")
         raise SystemExit(1) from exc
     log.info("analysis %s: %s after %.1f s", claim.job_id, state.value, time.perf_counter() - started)
+
+
+def _retry(config: Config, claim: Claim, reason: str) -> None:
+    db = Database.from_config(config.gateway)
+    try:
+        JobQueue(db, config.jobs).retry_or_fail(claim, reason)
+    except StorageError:
+        log.warning("analysis %s: the retry is left to the lease running out (database busy)", claim.job_id)
+    finally:
+        db.close()
 
 
 def _die_with_parent() -> None:
     """Linux: SIGKILL this process when its worker dies, so no orphan keeps writing into the job's folder."""
     import ctypes
     import multiprocessing
-    import signal
 
     try:
         libc = ctypes.CDLL("libc.so.6", use_errno=True)

@@ -16,6 +16,7 @@ class Workers:
         self.config = config
         self.context = multiprocessing.get_context("spawn")
         self.processes: list[multiprocessing.process.BaseProcess] = []
+        self.stopped = False
 
     def _spawn(self, index: int):
         process = self.context.Process(target=worker.main, args=(self.config, True), name=f"burnedge-worker-{index}",
@@ -30,7 +31,7 @@ class Workers:
     def check(self) -> int:
         """Restart workers that died (killed, out of memory); returns how many were restarted."""
         restarted = 0
-        for i, process in enumerate(self.processes):
+        for i, process in enumerate(self.processes if not self.stopped else []):
             if not process.is_alive():
                 log.warning("analysis worker %d (pid %s) stopped with %s: restarting it", i, process.pid,
                             worker.describe_exit(process.exitcode))  # fmt: skip
@@ -45,6 +46,7 @@ class Workers:
 
     def stop(self, timeout_s: float = 10.0) -> None:
         """SIGTERM: each worker hands its job back to the queue and exits; killed if it does not in time."""
+        self.stopped = True  # a check() running in the scheduler's thread must not start one again
         for process in self.processes:
             if process.is_alive():
                 process.terminate()

@@ -25,7 +25,7 @@ TRACK = "track.json"
 
 
 def sessions(db: Database, config: Config, patient_id: str) -> list:
-    """The latest finished measurement of each of the patient's encounters, by day since the first visit."""
+    """The latest finished measurement of each of the patient's encounters, with its day since the injury."""
     conn = db.connection()
     rows = conn.execute(
         "SELECT id, encounter_id FROM analysis_jobs WHERE patient_id = ? AND state = 'done'"
@@ -38,20 +38,24 @@ def sessions(db: Database, config: Config, patient_id: str) -> list:
         encounter = store.find_head(conn, RecordKind.encounter, encounter_id)
         if encounter is None or encounter.meta.deleted:
             continue
-        visits.append((dt.datetime.fromisoformat(encounter.data["time_of_arrival"]), encounter_id, job_id))
+        injury = encounter.data.get("time_of_injury")
+        visits.append((dt.datetime.fromisoformat(encounter.data["time_of_arrival"]), encounter_id, job_id,
+                       dt.datetime.fromisoformat(injury) if injury else None))  # fmt: skip
     visits.sort()
     from processing.longitudinal.track import SessionAnalysis  # Open3D: only ever in a job's process
 
     if not visits:
         return []
-    first = visits[0][0]
+    # Days since the injury when the first visit recorded it (the day-21 healing prompt counts from the injury),
+    # else since the first visit.
+    start = visits[0][3] or visits[0][0]
     return [
         SessionAnalysis(
-            day=round((at - first).total_seconds() / 86400, 2),
+            day=round((at - start).total_seconds() / 86400, 2),
             label=f"encounter {encounter_id}",
             analysis_dir=folders.analysis_dir(config, job_id),
         )  # fmt: skip
-        for at, encounter_id, job_id in visits
+        for at, encounter_id, job_id, _ in visits
     ]
 
 

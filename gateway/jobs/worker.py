@@ -20,6 +20,7 @@ import uuid
 from gateway.jobs.queue import Claim, JobQueue
 from gateway.storage.database import Database
 from schemas.config import Config
+from schemas.errors import StorageError
 from schemas.jobs import JobState
 
 log = logging.getLogger("burnedge.worker")
@@ -54,7 +55,12 @@ class Worker:
         done = 0
         log.info("worker %s: waiting for analyses (nice %d)", self.owner, os.nice(0))
         while not self.stopping.is_set() and not self.orphaned():
-            claim = self.queue.claim(self.owner)
+            try:
+                claim = self.queue.claim(self.owner)
+            except StorageError as exc:  # database busy: look again later, never die of it
+                log.warning("worker %s: cannot look for work now (%s)", self.owner, exc.detail)
+                self.stopping.wait(self.config.jobs.poll_s)
+                continue
             if claim is None:
                 if drain:
                     break
@@ -70,32 +76,50 @@ class Worker:
         child = self.context.Process(target=_run_child, args=(self.config, claim),
                                      name=f"analysis-{claim.job_id}")  # fmt: skip
         child.start()
-        beat_every = self.config.jobs.heartbeat_s
-        next_beat = time.monotonic() + beat_every
+        conf = self.config.jobs
+        started = next_beat = time.monotonic()
         finished = False
         while child.is_alive():
-            child.join(timeout=min(0.5, beat_every))
+            child.join(timeout=min(0.5, conf.heartbeat_s))
             if self.stopping.is_set() or self.orphaned():
                 _kill(child)
-                if not self.orphaned():
-                    self.queue.release(claim)
-                return JobState.queued
-            if time.monotonic() >= next_beat and child.is_alive() and not finished:
+                return _quietly(lambda: self.queue.release(claim), JobState.queued)
+            if time.monotonic() - started > conf.max_run_s and child.is_alive():
+                _kill(child)
+                log.error("analysis %s: still running after %.0f s, stopped as hung", claim.job_id, conf.max_run_s)
+                return _quietly(lambda: self.queue.retry_or_fail(claim, f"it was still running after {conf.max_run_s:.0f}"
+                                                                        " s and was stopped as hung"), JobState.running)  # fmt: skip
+            if time.monotonic() < next_beat or not child.is_alive() or finished:
+                continue
+            try:
                 beat = self.queue.heartbeat(claim)
-                next_beat = time.monotonic() + beat_every
-                finished = beat.finished  # stored: the process only updates the healing track now; let it
-                if not beat.owned and not finished:
-                    log.warning("analysis %s: lease lost to another worker; stopping this try", claim.job_id)
-                    _kill(child)
-                    return JobState.running
-                if beat.cancel:
-                    _kill(child)
-                    self.queue.finish(claim, JobState.cancelled, error=None, message="cancelled")
-                    log.info("analysis %s cancelled", claim.job_id)
-                    return JobState.cancelled
+            except StorageError as exc:  # the lease outlasts a few missed beats
+                log.warning("analysis %s: heartbeat missed (%s)", claim.job_id, exc.detail)
+                continue
+            next_beat = time.monotonic() + conf.heartbeat_s
+            finished = beat.finished  # the result is stored: the process only updates the healing track now
+            if not beat.owned and not finished:
+                log.warning("analysis %s: lease lost; stopping this try", claim.job_id)
+                _kill(child)
+                return JobState.running
+            if beat.cancel:
+                _kill(child)
+                _quietly(lambda: self.queue.finish(claim, JobState.cancelled, error=None, message="cancelled"), None)
+                log.info("analysis %s cancelled", claim.job_id)
+                return JobState.cancelled
         if child.exitcode != 0:
-            return self.queue.retry_or_fail(claim, describe_exit(child.exitcode))
+            return _quietly(lambda: self.queue.retry_or_fail(claim, describe_exit(child.exitcode)), JobState.running)
         return JobState.done
+
+
+def _quietly(action, fallback):
+    """A queue write that must not kill the worker: if the database stays busy the lease runs out and the gateway
+    queues the job again."""
+    try:
+        return action()
+    except StorageError as exc:
+        log.warning("queue not updated (%s); the job's lease will run out and it will be queued again", exc.detail)
+        return fallback
 
 
 def _run_child(config: Config, claim: Claim) -> None:
@@ -106,6 +130,19 @@ def _run_child(config: Config, claim: Claim) -> None:
     runner.child_main(config, claim)
 
 
+def _redirect_output(path: str) -> None:
+    """Point this process's stdout and stderr (the file descriptors: native libraries write there too, and the
+    analysis processes inherit them) at the log file."""
+    import sys
+
+    fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_APPEND, 0o640)
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os.dup2(fd, 1)
+    os.dup2(fd, 2)
+    os.close(fd)
+
+
 def _kill(child) -> None:
     child.kill()
     child.join(timeout=10)
@@ -113,9 +150,14 @@ def _kill(child) -> None:
 
 def main(config: Config, supervised: bool = False, drain: bool = False) -> int:
     """Process entry point: lower priority, stop cleanly on SIGTERM."""
+    if config.jobs.log_file:
+        _redirect_output(config.jobs.log_file)
     if supervised:
         logging.basicConfig(level=logging.INFO, format="%(asctime)s %(levelname)s %(name)s: %(message)s")
     os.nice(config.jobs.nice)
     worker = Worker(config, supervised=supervised)
     signal.signal(signal.SIGTERM, lambda *_: worker.stopping.set())
+    # Ctrl-C in the gateway's terminal reaches its workers too: the gateway stops them itself (SIGTERM); a worker on
+    # its own treats Ctrl-C like SIGTERM and hands its job back.
+    signal.signal(signal.SIGINT, signal.SIG_IGN if supervised else (lambda *_: worker.stopping.set()))
     return worker.serve(drain=drain)

@@ -57,7 +57,12 @@ class AnalysisService:
                 if mark.asset_id not in by_id:
                     raise InvalidInput(f"ruler mark on {mark.asset_id}, which is not one of the analysed pictures")
         refs = [PictureRef(asset_id=p.id, sha256=p.sha256, suffix=SUFFIX[p.media_type]) for p in pictures]
-        digest = _digest(self.config, refs, body)
+        with self.db.read() as conn:
+            patient = store.get_head(conn, RecordKind.patient, encounter.data["patient_id"]).data
+        # What the analysis reads from the record (%TBSA, provisional): a correction makes a new analysis.
+        record = [patient.get("height_cm"), patient.get("weight_kg"), encounter.data.get("weight_kg"),
+                  encounter.data.get("time_of_injury")]  # fmt: skip
+        digest = _digest(self.config, refs, body, record)
         mode = EncounterMode(encounter.data["mode"])
         now = iso(utcnow())
         inputs = JobInputs(pictures=refs, masks=body.masks, ruler=body.ruler, marker_side_mm=body.marker_side_mm,
@@ -181,10 +186,11 @@ def _check_mask(mask, pictures: dict[str, Asset]) -> None:
                            f"{size[0]}x{size[1]}: draw it on the picture as stored")  # fmt: skip
 
 
-def _digest(config: Config, refs: list[PictureRef], body: AnalysisRequest) -> str:
-    """What makes two requests the same analysis: the pictures' bytes, masks, ruler, settings and code."""
+def _digest(config: Config, refs: list[PictureRef], body: AnalysisRequest, record: list) -> str:
+    """What makes two requests the same analysis: the pictures' bytes, masks, ruler, the record's figures it
+    uses, settings and code."""
     settings = [msgspec.to_builtins(config.quality), msgspec.to_builtins(config.reconstruction),
                 msgspec.to_builtins(msgspec.structs.replace(config.analysis, threads=1))]  # fmt: skip
     parts = [sorted(r.sha256 for r in refs), msgspec.to_builtins(body.masks), msgspec.to_builtins(body.ruler),
-             body.marker_side_mm, settings, code_digest()]  # fmt: skip
+             body.marker_side_mm, record, settings, code_digest()]  # fmt: skip
     return hashlib.sha256(json.dumps(parts, sort_keys=True).encode()).hexdigest()

@@ -22,7 +22,7 @@ log = logging.getLogger(__name__)
 T = TypeVar("T")
 
 
-CODE_PACKAGES = ("capture", "reconstruction", "segmentation", "analysis")
+CODE_PACKAGES = ("capture", "reconstruction", "segmentation", "analysis", "clinical")
 """The processing packages whose code makes the analysis artifacts..."""
 ARTIFACT_SCHEMAS = ("capture", "reconstruction", "segmentation", "analysis")
 """...and the schemas the artifacts are written in."""
