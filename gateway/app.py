@@ -70,6 +70,8 @@ def _start_background(app: Litestar, services: Services, workers: Workers | None
 
 
 def _stop_background(app: Litestar, workers: Workers | None) -> None:
-    app.state.scheduler.shutdown(wait=False)
+    # Wait for a running periodic job: the database's connections are closed next, and closing one a job's thread
+    # is still using crashes the process (SQLite).
+    app.state.scheduler.shutdown(wait=True)
     if workers is not None:
         workers.stop()
