@@ -27,7 +27,7 @@ def test_the_demo_uploads_analyses_and_aligns_four_visits_then_exits(tmp_path):
     track = json.loads(open(track_line.split()[2]).read())
     truth = json.loads((tmp_path / "phantoms" / "ground_truth.json").read_text())
     # Days since the injury, 3 h before the first visit.
-    assert [s["day"] for s in track["sessions"]] == pytest.approx([0.13, 7.13, 14.13, 21.13], abs=0.01)
+    assert [s["day"] for s in track["sessions"]] == pytest.approx([0.125, 7.125, 14.125, 21.125], abs=0.01)
     for session, true in zip(track["sessions"], truth["sessions"], strict=True):
         true_change = 100 * (true["area_ratio_vs_day0"] - 1)
         assert session["area_change_percent"] == pytest.approx(true_change, abs=3.0), session
