@@ -77,7 +77,7 @@ def summary_table(track: dict, jobs: list[dict], results: list[dict]) -> str:
     )
     if closure is not None:
         extra = f" (95 % range day {spread[0]:.0f} to {spread[1]:.0f})" if spread else ""
-        lines.append(f"Projected closure: day {closure:.0f} after the first visit{extra}")
+        lines.append(f"Projected closure: day {closure:.0f}{extra} (days as in the table)")
     lines.append("Review prompts (decision support, for the clinician):")
     for flag in track.get("stall_flags", []):
         status = "REVIEW" if flag.get("triggered") else ("ok" if flag.get("evaluable") else "n/a")
