@@ -39,15 +39,15 @@ from schemas.records import RecordKind
 
 log = logging.getLogger("burnedge.jobs")
 
-STAGES = {  # stage: (share of the work done when it starts, share it takes, what the user sees)
-    "inputs": (0.00, 0.02, "checking the pictures"),
-    "sfm": (0.02, 0.25, "placing the pictures in 3D (structure from motion)"),
-    "scale": (0.27, 0.02, "setting the scale from the printed marker"),
-    "dense": (0.29, 0.33, "building the surface (multi-view stereo)"),
-    "mesh": (0.62, 0.13, "meshing the surface"),
-    "segment": (0.75, 0.05, "finding the burn in each picture"),
-    "surface": (0.80, 0.07, "painting the burn onto the surface"),
-    "metrics": (0.87, 0.13, "measuring area, perimeter, relief and volume"),
+STAGES = {  # stage: (share of the work done when it starts, what the user sees)
+    "inputs": (0.00, "checking the pictures"),
+    "sfm": (0.02, "placing the pictures in 3D (structure from motion)"),
+    "scale": (0.27, "setting the scale from the printed marker"),
+    "dense": (0.29, "building the surface (multi-view stereo)"),
+    "mesh": (0.62, "meshing the surface"),
+    "segment": (0.75, "finding the burn in each picture"),
+    "surface": (0.80, "painting the burn onto the surface"),
+    "metrics": (0.87, "measuring area, perimeter, relief and volume"),
 }
 GATEWAY_USER = "gateway"
 
@@ -67,7 +67,7 @@ def run(config: Config, claim: Claim) -> JobState:
                 config.reconstruction, marker_side_mm=inputs.marker_side_mm))  # fmt: skip
 
         def progress(stage: str) -> None:
-            start, _, text = STAGES.get(stage, (0.0, 0.0, stage))
+            start, text = STAGES.get(stage, (0.0, stage))
             try:
                 queue.progress(claim, stage, start, text)
             except StorageError:  # progress is for people waiting; the analysis goes on without it
