@@ -16,6 +16,7 @@ from gateway.controllers.health import health
 from gateway.controllers.parts import PART_CONTROLLERS
 from gateway.controllers.records import EncounterController, PatientController
 from gateway.controllers.sync import SyncController
+from gateway.controllers.transfers import TransferController
 from gateway.controllers.uploads import UploadController
 from gateway.dependencies import Services, provide_services
 from gateway.errors import EXCEPTION_HANDLERS
@@ -43,6 +44,7 @@ def create_app(config: Config, *, start_workers: bool = False) -> Litestar:
             UploadController,
             AssetController,
             AnalysisController,
+            TransferController,
         ],  # fmt: skip
         dependencies={
             "services": Provide(provide_services, sync_to_thread=False, use_cache=True),

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import msgspec
 
-from gateway import cli_analysis
+from gateway import cli_analysis, cli_sync
 from schemas.config import Config, load_config
 from schemas.errors import AuthenticationFailed, BurnedgeError, Conflict, InvalidInput, NotFound
 
@@ -91,20 +91,25 @@ def cmd_worker(args: argparse.Namespace) -> int:
 
 
 def cmd_users_add(args: argparse.Namespace) -> int:
-    from gateway.dependencies import Services
+    from gateway.services.accounts import AccountService
     from gateway.storage.database import Database
     from schemas.accounts import Role, UserCreate
 
     config = _config(args)
     password = sys.stdin.readline().rstrip("\n") if args.password_stdin else getpass.getpass("Password: ")
-    db = Database.from_config(config.gateway)
-    try:
+    if args.center:
+        from sync.central.app import open_center_db
+
+        db = open_center_db(config.central)
+    else:
+        db = Database.from_config(config.gateway)
         db.migrate()
+    try:
         body = msgspec.convert(
             {"username": args.username, "password": password, "role": args.role, "display_name": args.name or ""},
             UserCreate,
         )
-        user = Services.build(config, db).accounts.create_user(None, body)
+        user = AccountService(db, config.security).create_user(None, body)
     except msgspec.ValidationError as exc:
         raise InvalidInput(f"{exc} (usernames: lower-case letters, digits . _ -; passwords: 10+ characters;"
                            f" roles: {', '.join(r.value for r in Role)})") from exc  # fmt: skip
@@ -259,6 +264,7 @@ def build_parser() -> argparse.ArgumentParser:
     rec.set_defaults(func=cmd_reconstruct)
 
     cli_analysis.add_commands(sub, _config)
+    cli_sync.add_commands(sub, _config)
 
     phantom = sub.add_parser("phantom", help="render a burn phantom: multi-view photos with exact ground truth")
     phantom.add_argument("--out", required=True, metavar="DIR", help="folder for images/, masks/, ground_truth.json")
@@ -282,6 +288,7 @@ def build_parser() -> argparse.ArgumentParser:
     add.add_argument("--role", required=True, choices=["clinician", "nurse", "admin", "consultant"])
     add.add_argument("--name", help="display name")
     add.add_argument("--password-stdin", action="store_true", help="read the password from standard input")
+    add.add_argument("--center", action="store_true", help="an account at the burn center's server (consultants)")
     add.set_defaults(func=cmd_users_add)
 
     audit = sub.add_parser("audit", help="the audit trail").add_subparsers(dest="audit_cmd", required=True)

@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Annotated
 
 from litestar import Request
 from litestar.datastructures import State
-from litestar.di import NamedDependency
+from litestar.params import Dependency
 
 from gateway.services.accounts import AccountService
 from gateway.services.analyses import AnalysisService
@@ -14,6 +16,7 @@ from gateway.services.assets import AssetService
 from gateway.services.frames import FrameService
 from gateway.services.permissions import Principal
 from gateway.services.records import RecordService
+from gateway.services.transfers import TransferService
 from gateway.services.uploads import UploadService
 from gateway.storage.blobs import MediaStore, media_root
 from gateway.storage.database import Database
@@ -32,6 +35,9 @@ class Services:
     uploads: UploadService
     frames: FrameService
     analyses: AnalysisService
+    transfers: TransferService
+    run_sync_now: Callable[[], None] = lambda: None
+    """Starts a sync round at once (set by the scheduler when [sync] enabled)."""
 
     @classmethod
     def build(cls, config: Config, db: Database) -> Services:
@@ -48,6 +54,7 @@ class Services:
             uploads=UploadService(db, config, store, assets),
             frames=FrameService(db, config, assets),
             analyses=AnalysisService(db, config, assets),
+            transfers=TransferService(db, config),
         )
 
 
@@ -59,8 +66,9 @@ def client_address(request: Request) -> str:
     return request.client.host if request.client else "unknown"
 
 
-ServicesDep = NamedDependency[Services]
-"""Declared by name ("services"); the app factory provides it."""
+ServicesDep = Annotated[Services, Dependency(skip_validation=True)]
+"""Declared by name ("services"); the app factory provides it. Not validated: the burn center's server provides
+its own services object to the shared account handlers (login, users)."""
 
 AuthedRequest = Request[Principal, str, State]
 """A request the session middleware has authenticated: request.user is the Principal.

@@ -13,6 +13,7 @@ from schemas.base import utcnow
 
 log = logging.getLogger("burnedge.scheduler")
 FRAMES_JOB = "extract-frames"
+SYNC_JOB = "sync-with-center"
 
 
 def start_scheduler(services: Services, workers: Workers | None = None) -> BackgroundScheduler:
@@ -38,6 +39,14 @@ def start_scheduler(services: Services, workers: Workers | None = None) -> Backg
                           coalesce=True, max_instances=1)  # fmt: skip
     scheduler.add_job(lambda: clean_up(services.db, config), "interval", seconds=config.jobs.cleanup_every_s,
                       id="analysis-retention", coalesce=True, max_instances=1, next_run_time=utcnow())  # fmt: skip
+    if config.sync.enabled:
+        sync = services.transfers.sync
+        scheduler.add_job(sync.scheduled_round, "interval", seconds=config.sync.interval_s, id=SYNC_JOB,
+                          coalesce=True, max_instances=1, next_run_time=utcnow())  # fmt: skip
+        # A clinician sending a case: one round now, whatever the backoff (the round lock keeps it single).
+        services.run_sync_now = lambda: scheduler.add_job(
+            sync.scheduled_round, kwargs={"force": True}, id=SYNC_JOB + "-now", replace_existing=True
+        )
     scheduler.start()
     return scheduler
 

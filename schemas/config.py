@@ -368,6 +368,73 @@ class TrackingConfig(Message):
                                           f"got {self.icp_distances_mm}")  # fmt: skip
 
 
+class SyncConfig(Message):
+    """The clinic's side of store-and-forward: cases go to the burn center over Zenoh, advice comes back."""
+
+    enabled: bool = False
+    """Run the sender in `burnedge serve`: queued cases are sent and the center's advice fetched whenever a link
+    exists. Needs this site's keys (`burnedge keys init`), the center enrolled and `center_endpoints`."""
+    keys_dir: str = ""
+    """Folder of this site's keys; empty means "burnedge-keys" beside the database. Back it up: a site that loses
+    its keys must be enrolled again at the center."""
+    outbox_dir: str = ""
+    """Folder of the encrypted chunks waiting to be sent; empty means "burnedge-outbox" beside the database."""
+    center_id: str = ""
+    """The enrolled center to send to; empty: the one enrolled center."""
+    center_endpoints: list[str] = []
+    """Zenoh endpoints of the burn center the clinic connects out to, e.g. "tcp/203.0.113.5:7447" or
+    "tls/center.example.org:7447" (clinics sit behind NAT: the center never connects in)."""
+    zenoh_config: str = ""
+    """A Zenoh JSON5 config file (TLS certificates, transport tuning); the endpoints and mode above override it."""
+    connect_timeout_s: Annotated[float, msgspec.Meta(gt=0)] = 10.0
+    """How long to try to reach the center before counting the round as failed."""
+    chunk_kib: Annotated[int, msgspec.Meta(ge=16, le=1024)] = 128
+    """Size of the encrypted chunks a bundle is sent in (each one acknowledged)."""
+    window_chunks: Annotated[int, msgspec.Meta(ge=1, le=64)] = 8
+    """Chunks sent before waiting for the first acknowledgement; keeps a slow link busy."""
+    query_timeout_s: Annotated[float, msgspec.Meta(gt=0)] = 120.0
+    """How long one request to the center may wait for its answer (a full window must cross a slow link)."""
+    interval_s: Annotated[float, msgspec.Meta(gt=0)] = 15.0
+    """How often the gateway looks for work to send and fetches the center's advice."""
+    retry_base_s: Annotated[float, msgspec.Meta(ge=0)] = 5.0
+    """Wait after a failed round; doubled after each further failure, with full random jitter."""
+    retry_max_s: Annotated[float, msgspec.Meta(gt=0)] = 600.0
+    """Longest wait between rounds after failures."""
+    pictures: Annotated[int, msgspec.Meta(ge=0, le=200)] = 24
+    """Photos of the encounter sent with a case, first taken first (the analyses' overlays always go)."""
+    key_prefix: str = "burnedge"
+    """First part of every Zenoh key expression; must match the center's."""
+
+
+class CentralConfig(Message):
+    """The burn center's server (`burnedge central`)."""
+
+    database: str = "burnedge-central.sqlite3"
+    """SQLite file of received cases, consultants' accounts and notes."""
+    store_dir: str = ""
+    """Folder of received bundles' files; empty means "burnedge-central-store" beside the database."""
+    keys_dir: str = ""
+    """Folder of the center's keys; empty means "burnedge-central-keys" beside the database."""
+    listen_endpoints: list[str] = msgspec.field(default_factory=lambda: ["tcp/0.0.0.0:7447"])
+    """Zenoh endpoints clinics connect to (use tls/... with certificates in `zenoh_config` on the internet)."""
+    zenoh_config: str = ""
+    """A Zenoh JSON5 config file (TLS certificates, transport tuning); the endpoints above override it."""
+    host: str = "127.0.0.1"
+    """Address of the consultants' HTTP API."""
+    port: Annotated[int, msgspec.Meta(ge=1, le=65535)] = 8090
+    """Port of the consultants' HTTP API."""
+    max_bundle_mib: Annotated[int, msgspec.Meta(ge=1)] = 512
+    """Largest bundle accepted; larger announcements are rejected with the reason."""
+    max_chunk_kib: Annotated[int, msgspec.Meta(ge=16)] = 1024
+    """Largest chunk accepted."""
+    stale_transfer_days: Annotated[float, msgspec.Meta(gt=0)] = 14.0
+    """Chunks of a bundle announced but never completed are removed after this many days."""
+    handler_threads: Annotated[int, msgspec.Meta(ge=1, le=32)] = 4
+    """Threads answering clinics' requests."""
+    key_prefix: str = "burnedge"
+    """First part of every Zenoh key expression; must match the clinics'."""
+
+
 class Config(Message):
     gateway: GatewayConfig = msgspec.field(default_factory=GatewayConfig)
     """The HTTP gateway and its database."""
@@ -391,6 +458,10 @@ class Config(Message):
     """The analysis queue and its workers."""
     tracking: TrackingConfig = msgspec.field(default_factory=TrackingConfig)
     """Healing over time: registration of each visit to the first, healing rate and review prompts."""
+    sync: SyncConfig = msgspec.field(default_factory=SyncConfig)
+    """Sending cases to the burn center and receiving its advice (the clinic's side)."""
+    central: CentralConfig = msgspec.field(default_factory=CentralConfig)
+    """The burn center's server."""
 
 
 def load_config(path: str | Path | None = None, environ: dict[str, str] | None = None) -> Config:
@@ -408,7 +479,7 @@ def load_config(path: str | Path | None = None, environ: dict[str, str] | None =
                 ("quality", QualityGateConfig), ("uploads", UploadConfig), ("frames", FramesConfig),
                 ("readiness", ReadinessConfig), ("reconstruction", ReconstructionConfig),
                 ("analysis", AnalysisConfig), ("jobs", JobsConfig),
-                ("tracking", TrackingConfig))  # fmt: skip
+                ("tracking", TrackingConfig), ("sync", SyncConfig), ("central", CentralConfig))  # fmt: skip
     for section, struct in sections:
         defaults = struct()
         for field in struct.__struct_fields__:

@@ -157,3 +157,23 @@ class CaptureInsufficient(InvalidInput):
     def __init__(self, detail: str, *, code: str):
         super().__init__(detail)
         self.code = code
+
+
+class MissingKeys(InvalidInput):
+    """This site has no keys yet (`burnedge keys init`)."""
+
+    status = 503
+    slug = "missing-keys"
+    title = "This site has no keys"
+
+
+class TransferRejected(BurnedgeError):
+    """A bundle, chunk or message from a peer failed a check; `code` names which (logged, and told the sender)."""
+
+    status = 422
+    slug = "transfer-rejected"
+    title = "Transfer rejected"
+
+    def __init__(self, detail: str, *, code: str):
+        super().__init__(detail)
+        self.code = code

@@ -12,6 +12,7 @@ from schemas.clinical_results import Assessment
 from schemas.jobs import BurnAnalysis
 from schemas.patient import Encounter, Patient
 from schemas.record_parts import Intake, Mechanism, PrimarySurvey, Resuscitation, SecondarySurvey
+from schemas.transfer import Consultation
 
 
 class RecordKind(enum.StrEnum):
@@ -27,6 +28,8 @@ class RecordKind(enum.StrEnum):
     """Calculator results; written by the server only."""
     burn_analysis = "burn_analysis"
     """A finished 3D burn analysis of an encounter's pictures; written by the gateway's workers only."""
+    consultation = "consultation"
+    """A burn-center consultant's note on an encounter, as received over sync; written by the gateway only."""
 
     @property
     def label(self) -> str:
@@ -45,6 +48,7 @@ RECORD_TYPES: dict[RecordKind, type[msgspec.Struct]] = {
     RecordKind.resuscitation: Resuscitation,
     RecordKind.assessment: Assessment,
     RecordKind.burn_analysis: BurnAnalysis,
+    RecordKind.consultation: Consultation,
 }
 
 # Encounter parts are one per encounter: their record id is the encounter's id.

@@ -11,7 +11,7 @@ from schemas.errors import Forbidden
 from schemas.records import Record, RecordKind
 
 ALL_KINDS = frozenset(RecordKind)
-CLIENT_WRITABLE = ALL_KINDS - {RecordKind.assessment, RecordKind.burn_analysis}
+CLIENT_WRITABLE = ALL_KINDS - {RecordKind.assessment, RecordKind.burn_analysis, RecordKind.consultation}
 
 READ: dict[Role, frozenset[RecordKind]] = {
     Role.clinician: ALL_KINDS,

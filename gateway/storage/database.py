@@ -117,9 +117,12 @@ class Database:
             if conn.in_transaction:
                 conn.execute("COMMIT")
 
-    def migrate(self) -> list[str]:
-        """Apply pending migrations; returns the names applied. Safe when processes start together."""
-        from gateway.storage.migrations import migrations
+    def migrate(self, migration_set=None) -> list[str]:
+        """Apply pending migrations (the gateway's unless another set is given); returns the names applied.
+        Safe when processes start together."""
+        if migration_set is None:
+            from gateway.storage.migrations import migrations as migration_set
+        migrations = migration_set
 
         self.path.parent.mkdir(parents=True, exist_ok=True)
         with open(self.path.with_name(self.path.name + ".migrate-lock"), "w") as lock:

@@ -225,3 +225,34 @@ def m006_analysis_jobs(db: Database) -> None:
     db.execute("CREATE INDEX analysis_jobs_queue ON analysis_jobs (state, priority, created_at)")
     db.execute("CREATE INDEX analysis_jobs_encounter ON analysis_jobs (encounter_id, created_at)")
     db.execute("CREATE INDEX analysis_jobs_patient ON analysis_jobs (patient_id, created_at)")
+
+
+@migrations()
+def m007_sync(db: Database) -> None:
+    from sync.peers import PEERS_DDL
+
+    db.execute(PEERS_DDL)
+    db.execute(
+        """
+        CREATE TABLE outbox (
+            bundle_id TEXT PRIMARY KEY,
+            encounter_id TEXT NOT NULL,
+            version INTEGER NOT NULL,
+            center_id TEXT NOT NULL,
+            content_digest TEXT NOT NULL,
+            state TEXT NOT NULL,
+            envelope BLOB NOT NULL,
+            chunks INTEGER NOT NULL,
+            bytes INTEGER NOT NULL,
+            sent_chunks INTEGER NOT NULL DEFAULT 0,
+            created_at TEXT NOT NULL,
+            created_by TEXT NOT NULL,
+            attempts INTEGER NOT NULL DEFAULT 0,
+            last_error TEXT,
+            delivered_at TEXT,
+            receipt BLOB,
+            UNIQUE (center_id, encounter_id, version)
+        )"""
+    )
+    db.execute("CREATE INDEX outbox_state ON outbox (state, created_at)")
+    db.execute("CREATE TABLE sync_state (key TEXT PRIMARY KEY, value TEXT NOT NULL)")

@@ -1,0 +1,43 @@
+"""Store-and-forward to the burn center: send a case, follow its delivery, read the consultants' advice."""
+
+from __future__ import annotations
+
+from litestar import Controller, Response, get, post
+from litestar.params import FromPath
+
+from gateway.dependencies import AuthedRequest, ServicesDep
+from schemas.records import Record
+from schemas.transfer import OutboxEntry, SyncStatus
+
+
+class TransferController(Controller):
+    path = "/api/v1"
+    tags = ["burn center"]
+
+    @post("/encounters/{encounter_id:str}/transfers", sync_to_thread=True,
+          summary="Send the encounter as it stands now to the burn center (encrypted; delivered when a link exists)")  # fmt: skip
+    def send(self, encounter_id: FromPath[str], request: AuthedRequest, services: ServicesDep) -> Response[OutboxEntry]:
+        entry = services.transfers.send(request.user, encounter_id)
+        if not entry.unchanged:
+            services.run_sync_now()
+        return Response(entry, status_code=200 if entry.unchanged else 202)
+
+    @get("/encounters/{encounter_id:str}/transfers", sync_to_thread=False,
+         summary="Versions of this encounter sent to the burn center, and whether each was delivered")  # fmt: skip
+    def transfers(
+        self, encounter_id: FromPath[str], request: AuthedRequest, services: ServicesDep
+    ) -> list[OutboxEntry]:
+        return services.transfers.transfers(request.user, encounter_id)
+
+    @get("/encounters/{encounter_id:str}/consultations", sync_to_thread=False,
+         summary="The burn center consultants' notes on this encounter (decision support)")  # fmt: skip
+    def consultations(self, encounter_id: FromPath[str], request: AuthedRequest, services: ServicesDep) -> list[Record]:
+        return services.transfers.consultations(request.user, encounter_id)
+
+    @get("/transfers", sync_to_thread=False, summary="The outbox: every case sent or waiting, newest first")
+    def outbox(self, request: AuthedRequest, services: ServicesDep) -> list[OutboxEntry]:
+        return services.transfers.all_transfers(request.user)
+
+    @get("/transfers/status", sync_to_thread=False, summary="The link to the burn center: last round, errors, backoff")
+    def status(self, request: AuthedRequest, services: ServicesDep) -> SyncStatus:
+        return services.transfers.status(request.user)

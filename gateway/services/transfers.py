@@ -1,0 +1,49 @@
+"""Sending a case to the burn center and reading the advice that came back, with the gateway's permissions."""
+
+from __future__ import annotations
+
+from gateway.services.permissions import Principal, require_read
+from gateway.storage import records as store
+from gateway.storage.database import Database
+from schemas.accounts import Role
+from schemas.config import Config
+from schemas.errors import Forbidden
+from schemas.records import Record, RecordKind
+from schemas.transfer import OutboxEntry, SyncStatus
+from sync.service import SyncService
+
+SENDERS = frozenset({Role.clinician})
+"""Sending a patient's record off site is the treating clinician's decision."""
+
+
+class TransferService:
+    def __init__(self, db: Database, config: Config):
+        self.db = db
+        self.sync = SyncService(db, config)
+
+    def send(self, who: Principal, encounter_id: str) -> OutboxEntry:
+        if who.role not in SENDERS:
+            raise Forbidden("only a clinician may send a case to the burn center")
+        require_read(who, RecordKind.encounter)
+        return self.sync.queue(encounter_id, who.username)
+
+    def transfers(self, who: Principal, encounter_id: str) -> list[OutboxEntry]:
+        require_read(who, RecordKind.encounter)
+        store.get_head(self.db.connection(), RecordKind.encounter, encounter_id)
+        return self.sync.outbox.entries(encounter_id)
+
+    def all_transfers(self, who: Principal) -> list[OutboxEntry]:
+        if who.role not in (Role.admin, Role.clinician, Role.nurse):
+            raise Forbidden("only clinic staff see the outbox")
+        return self.sync.outbox.entries()
+
+    def consultations(self, who: Principal, encounter_id: str) -> list[Record]:
+        require_read(who, RecordKind.consultation)
+        conn = self.db.connection()
+        store.get_head(conn, RecordKind.encounter, encounter_id)
+        return store.list_heads(conn, RecordKind.consultation, parent_id=encounter_id, limit=None)
+
+    def status(self, who: Principal) -> SyncStatus:
+        if who.role not in (Role.admin, Role.clinician, Role.nurse):
+            raise Forbidden("only clinic staff see the link to the burn center")
+        return self.sync.status()

@@ -1,0 +1,57 @@
+"""What the burn center's consultant API returns and accepts."""
+
+from __future__ import annotations
+
+import msgspec
+
+from schemas.base import Frozen, LongText, Message
+from schemas.transfer import BundleManifest, CaseSummary, ConsultationNote, Recommendation, SiteId, Urgency
+
+
+class CaseItem(Frozen):
+    """One received version of a clinic's case, as the consultant's list shows it."""
+
+    site_id: SiteId
+    site_name: str
+    bundle_id: str
+    encounter_id: str
+    patient_id: str
+    version: int
+    urgency: Urgency
+    summary: CaseSummary
+    stored_at: str
+    superseded_by: str | None
+    """A newer version of the same encounter, when one arrived; this one stays readable."""
+    notes: int
+    """Notes written on this encounter so far."""
+    awaiting_advice: bool
+    """No note has been written since this version arrived."""
+
+
+class NoteStatus(Frozen):
+    note: ConsultationNote
+    delivered_at: str | None
+    """When the clinic confirmed it stored the note; None while it is on its way."""
+
+
+class CaseDetail(Frozen):
+    case: CaseItem
+    manifest: BundleManifest
+    """Every part of the bundle with its sha256 and size (download each from /parts/{name})."""
+    versions: list[CaseItem]
+    """Every version of this encounter received, newest first."""
+    notes: list[NoteStatus]
+
+
+class NoteRequest(Message):
+    recommendation: Recommendation
+    advice: LongText = msgspec.field()
+    """The advice for the treating clinician, in plain words."""
+
+
+class RejectionItem(Frozen):
+    at: str
+    site_id: str | None
+    code: str
+    reason: str
+    key: str

@@ -1,0 +1,271 @@
+"""Store-and-forward between a clinic's gateway and the burn center: keys, case bundles and the wire messages.
+
+What relays see is a `SignedEnvelope` around a `TransferManifest` (ids, sizes, chunk hashes, the sealed key) and
+the encrypted chunks. Everything about the patient is inside the encrypted bundle: its `BundleManifest`, the
+record, the analyses and their files.
+"""
+
+from __future__ import annotations
+
+import enum
+from typing import Annotated
+
+import msgspec
+
+from schemas.base import Frozen, Id, LongText, ShortText
+
+SiteId = Annotated[str, msgspec.Meta(pattern=r"^[a-z0-9][a-z0-9-]{1,62}$", description="A site's name on the wire: "
+                                     "lower-case letters, digits and dashes, e.g. 'clinic-kasese'.")]  # fmt: skip
+Sha256 = Annotated[str, msgspec.Meta(pattern=r"^[0-9a-f]{64}$")]
+PROTOCOL = 1
+"""Version of the wire messages below; a receiver rejects others with the reason."""
+
+
+class SiteRole(enum.StrEnum):
+    clinic = "clinic"
+    center = "center"
+
+
+class SiteIdentity(Frozen):
+    """A site's public keys, as exchanged at enrolment (`burnedge keys export`) and kept by its peers."""
+
+    site_id: SiteId
+    role: SiteRole
+    name: ShortText
+    """What people call the site, e.g. 'Kasese field clinic'."""
+    sign_key: str
+    """Ed25519 verify key, hex: checks the site's signatures."""
+    box_key: str
+    """X25519 public key, hex: what is sent to the site is sealed to it."""
+    box_key_signature: str
+    """The box key signed with the sign key, hex: binds the two keys to one holder."""
+
+
+class Peer(Frozen):
+    """An enrolled peer as a site keeps it."""
+
+    identity: SiteIdentity
+    fingerprint: str
+    """Compare this with the peer's own `burnedge keys show` over the phone before trusting it."""
+    enrolled_at: str
+    enrolled_by: ShortText
+    revoked_at: str | None = None
+    revoke_reason: str | None = None
+
+
+class SignedEnvelope(Frozen):
+    """A message signed by its sender's Ed25519 key: `body` is the msgpack of the message named by `kind`."""
+
+    protocol: int
+    kind: str
+    signer: SiteId
+    body: bytes
+    signature: bytes
+
+
+class Urgency(enum.StrEnum):
+    """How soon a consultant should look, from the clinic's referral assessment (decision support)."""
+
+    immediate = "immediate"
+    """An immediate-consultation criterion (consider transfer) is met."""
+    consult = "consult"
+    """A consultation criterion is met."""
+    undetermined = "undetermined"
+    """The record lacks data the referral criteria need."""
+    routine = "routine"
+    """No referral criterion is met."""
+
+
+URGENCY_ORDER = {Urgency.immediate: 0, Urgency.consult: 1, Urgency.undetermined: 2, Urgency.routine: 3}
+
+
+class BundlePart(Frozen):
+    name: str
+    """Path inside the bundle, e.g. 'record.json', 'analyses/<job>/mesh/surface.glb'."""
+    media_type: str
+    sha256: Sha256
+    size: int
+
+
+class CaseSummary(Frozen):
+    """What a consultant's case list shows before opening a case."""
+
+    urgency: Urgency
+    urgency_reasons: list[str]
+    """The referral criteria met, as their text."""
+    encounter_mode: str
+    age_years: float | None
+    tbsa_percent: float | None
+    analyses: int
+    """Finished 3D analyses included."""
+    area_cm2: float | None
+    """Burn area of the latest analysis with a metric scale; None when none has one."""
+    analysis_confidence: str | None
+
+
+class BundleManifest(Frozen):
+    """The encrypted bundle's own table of contents: every part with its sha256 and size."""
+
+    bundle_id: Id
+    site_id: SiteId
+    patient_id: Id
+    encounter_id: Id
+    version: int
+    """1 for an encounter's first bundle; an amended encounter sends the next version."""
+    supersedes: Id | None
+    created_at: str
+    created_by: ShortText
+    summary: CaseSummary
+    parts: list[BundlePart]
+
+
+class ChunkRef(Frozen):
+    sha256: Sha256
+    """Of the encrypted chunk: chunks are content-addressed."""
+    size: int
+
+
+class TransferManifest(Frozen):
+    """The signed, unencrypted announcement of a bundle: no patient data, only what delivery needs."""
+
+    protocol: int
+    bundle_id: Id
+    site_id: SiteId
+    center_id: SiteId
+    encounter_id: Id
+    version: int
+    created_at: str
+    sealed_key: bytes
+    """The bundle's fresh symmetric key, sealed to the center's X25519 key."""
+    plain_size: int
+    chunks: list[ChunkRef]
+
+
+class AnnounceReply(Frozen):
+    status: str
+    """'send' (send the chunks not in `held`), or 'stored' (already stored: `receipt` is the proof)."""
+    held: list[int] = []
+    receipt: SignedEnvelope | None = None
+
+
+class Receipt(Frozen):
+    """The center's signed word that it reassembled, verified and stored a bundle."""
+
+    center_id: SiteId
+    site_id: SiteId
+    bundle_id: Id
+    version: int
+    manifest_sha256: Sha256
+    stored_at: str
+    duplicate: bool
+    """True when the bundle had been stored before (a re-send); nothing new was stored."""
+
+
+class CommitReply(Frozen):
+    status: str
+    """'stored' with `receipt`, or 'missing' with the chunk indexes still needed."""
+    missing: list[int] = []
+    receipt: SignedEnvelope | None = None
+
+
+class MailRequest(Frozen):
+    """A clinic asking for its messages; `after` acknowledges every message up to that sequence number."""
+
+    site_id: SiteId
+    center_id: SiteId
+    after: int
+    sent_at: str
+
+
+class SealedMessage(Frozen):
+    """A message to one site: encrypted with a fresh key sealed to the recipient, then signed by the sender."""
+
+    seq: int
+    recipient: SiteId
+    sealed_key: bytes
+    ciphertext: bytes
+
+
+class Recommendation(enum.StrEnum):
+    transfer = "transfer"
+    """Transfer to the burn center."""
+    manage_locally = "manage_locally"
+    """Manage at the clinic, with the advice below."""
+    telemedicine_follow_up = "telemedicine_follow_up"
+    """Send further pictures or a follow-up visit for review."""
+    more_information = "more_information"
+    """The consultant needs more information to advise."""
+
+
+class ConsultationNote(Frozen):
+    """A burn-center consultant's advice on a case: decision support for the treating clinician."""
+
+    note_id: Id
+    encounter_id: Id
+    patient_id: Id
+    bundle_id: Id
+    """The bundle (version of the case) the consultant read."""
+    bundle_version: int
+    center_id: SiteId
+    consultant: ShortText
+    """The consultant's name, as shown to the clinician."""
+    consultant_user_id: str
+    written_at: str
+    recommendation: Recommendation
+    advice: LongText
+    notice: str = "Advice from a remote consultant, who has not examined the patient: decision support for the " \
+                  "treating clinician, who decides."  # fmt: skip
+
+
+class Consultation(Frozen):
+    """The `consultation` record at the clinic: a note as received, with when and from which center."""
+
+    encounter_id: Id
+    note: ConsultationNote
+    received_at: str
+    signed_by: SiteId
+
+
+class OutboxState(enum.StrEnum):
+    queued = "queued"
+    """Waiting for a link to the center (or part-way sent: see sent_chunks)."""
+    delivered = "delivered"
+    """The center confirmed it reassembled, verified and stored the bundle (its signed receipt is kept)."""
+
+
+class OutboxEntry(Frozen):
+    """A case bundle at the clinic, on its way to the burn center or delivered."""
+
+    bundle_id: Id
+    encounter_id: Id
+    version: int
+    center_id: SiteId
+    state: OutboxState
+    chunks: int
+    sent_chunks: int
+    """Chunks the center has acknowledged so far."""
+    bytes: int
+    """Encrypted size."""
+    created_at: str
+    created_by: ShortText
+    attempts: int
+    """Rounds that tried to send it and failed (no link, center busy, a rejection)."""
+    last_error: str | None
+    delivered_at: str | None
+    unchanged: bool = False
+    """True when a send was asked for but nothing had changed since this bundle: no new version was made."""
+
+
+class SyncStatus(Frozen):
+    """The clinic's link to the burn center, for the IT person and the clinician's "sent" badge."""
+
+    enabled: bool
+    site_id: str | None
+    center_id: str | None
+    queued: int
+    delivered: int
+    last_round_at: str | None
+    last_success_at: str | None
+    last_error: str | None
+    next_round_at: str | None
+    failures_in_a_row: int

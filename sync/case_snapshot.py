@@ -1,0 +1,103 @@
+"""What a clinic sends for an encounter: its record, its finished analyses with the files that matter, and a
+summary for the consultant's case list, read in one snapshot of the gateway's database."""
+
+from __future__ import annotations
+
+import sqlite3
+
+import msgspec
+
+from gateway.jobs import folders
+from gateway.storage import records as store
+from gateway.storage.blobs import MediaStore, media_root
+from schemas.base import iso, utcnow
+from schemas.clinical_results import Assessment, ReferralTier
+from schemas.config import Config
+from schemas.records import ENCOUNTER_PARTS, EncounterRecord, RecordKind
+from schemas.transfer import BundleManifest, CaseSummary, Urgency
+from sync.bundle import PartData
+
+ANALYSIS_FILES = ("analysis.json", "metrics/metrics.json", "surface/burn_surface.glb", "segmentation/overlays/*.jpg",
+                  "report.pdf")  # fmt: skip
+"""Per analysis: the result, the burn painted on the mesh (GLB), the overlays that show the burn on each picture,
+and the PDF report when there is one."""
+
+
+def snapshot(conn: sqlite3.Connection, config: Config, encounter_id: str) -> tuple[EncounterRecord, list[PartData]]:
+    """The encounter's record and every part to send (record, patient, analyses with their files, photos)."""
+    encounter = store.get_head(conn, RecordKind.encounter, encounter_id)
+    record = EncounterRecord(encounter=encounter, parts=store.heads_of_children(conn, encounter_id, ENCOUNTER_PARTS))
+    patient = store.get_head(conn, RecordKind.patient, encounter.data["patient_id"])
+    parts = [
+        PartData("record.json", msgspec.json.encode(record)),
+        PartData("patient.json", msgspec.json.encode(patient)),
+    ]
+    analyses = [r for r in store.list_heads(conn, RecordKind.burn_analysis, parent_id=encounter_id, limit=None)]
+    media = MediaStore(media_root(config))
+    for analysis in analyses:
+        job_id = analysis.meta.id
+        parts.append(PartData(f"analyses/{job_id}/record.json", msgspec.json.encode(analysis)))
+        folder = folders.analysis_dir(config, job_id)
+        for name in _analysis_files(config, job_id):
+            parts.append(PartData(f"analyses/{job_id}/{name}", (folder / name).read_bytes()))
+    parts += _pictures(conn, media, encounter_id, config.sync.pictures)
+    return record, parts
+
+
+def summarize(record: EncounterRecord, parts: list[PartData]) -> CaseSummary:
+    """Urgency from the referral assessment computed at the clinic, and the headline figures."""
+    assessment_record = record.parts.get(RecordKind.assessment)
+    assessment = msgspec.convert(assessment_record.data, Assessment) if assessment_record else None
+    urgency, reasons = _urgency(assessment)
+    analyses = [msgspec.json.decode(p.data) for p in parts if p.name.endswith("/record.json")
+                and p.name.startswith("analyses/")]  # fmt: skip
+    analyses.sort(key=lambda r: r["data"]["completed_at"])
+    scaled = [a for a in analyses if a["data"]["result"]["metrics"].get("area_cm2") is not None]
+    latest = scaled[-1]["data"]["result"] if scaled else None
+    return CaseSummary(
+        urgency=urgency, urgency_reasons=reasons, encounter_mode=record.encounter.data["mode"],
+        age_years=assessment.age_years if assessment else None,
+        tbsa_percent=assessment.tbsa.tbsa_percent if assessment and assessment.tbsa else None,
+        analyses=len(analyses), area_cm2=latest["metrics"]["area_cm2"] if latest else None,
+        analysis_confidence=(latest.get("confidence") or {}).get("level") if latest else None,
+    )  # fmt: skip
+
+
+def manifest_for(record: EncounterRecord, parts: list[PartData], *, bundle_id: str, site_id: str, version: int,
+                 supersedes: str | None, created_by: str) -> BundleManifest:  # fmt: skip
+    return BundleManifest(
+        bundle_id=bundle_id, site_id=site_id, patient_id=record.encounter.data["patient_id"],
+        encounter_id=record.encounter.meta.id, version=version, supersedes=supersedes, created_at=iso(utcnow()),
+        created_by=created_by, summary=summarize(record, parts), parts=[p.described for p in parts],
+    )  # fmt: skip
+
+
+def _urgency(assessment: Assessment | None) -> tuple[Urgency, list[str]]:
+    if assessment is None or assessment.referral is None:
+        return Urgency.undetermined, ["no referral assessment yet (burn chart or patient data missing)"]
+    criteria = assessment.referral.current.criteria
+    met = [c for c in criteria if c.met]
+    if any(c.tier is ReferralTier.immediate for c in met):
+        return Urgency.immediate, [c.text for c in met]
+    if met:
+        return Urgency.consult, [c.text for c in met]
+    if any(c.met is None for c in criteria):
+        return Urgency.undetermined, [f"undetermined: {c.text}" for c in criteria if c.met is None]
+    return Urgency.routine, []
+
+
+def _analysis_files(config: Config, job_id: str) -> list[str]:
+    folder = folders.analysis_dir(config, job_id)
+    found = []
+    for pattern in ANALYSIS_FILES:
+        found += sorted(str(p.relative_to(folder)) for p in folder.glob(pattern) if p.is_file())
+    return found
+
+
+def _pictures(conn: sqlite3.Connection, media: MediaStore, encounter_id: str, limit: int) -> list[PartData]:
+    """The encounter's photos in the order they were taken in (up to `limit`; overlays show analysed ones too)."""
+    rows = conn.execute("SELECT id, sha256, media_type FROM assets WHERE encounter_id = ? AND kind = 'photo'"
+                        " ORDER BY created_at, id LIMIT ?", (encounter_id, limit)).fetchall()  # fmt: skip
+    suffixes = {"image/jpeg": ".jpg", "image/png": ".png", "image/heic": ".heic"}
+    return [PartData(f"photos/{r['id']}{suffixes.get(r['media_type'], '')}", media.blob(r["sha256"]).read_bytes())
+            for r in rows if media.blob(r["sha256"]).exists()]  # fmt: skip

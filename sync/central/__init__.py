@@ -1,0 +1,1 @@
+"""The burn center's side of store-and-forward (`burnedge central`)."""

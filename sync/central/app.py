@@ -1,0 +1,146 @@
+"""The burn center's server: the consultants' HTTP API and, started with it, the Zenoh endpoint clinics call."""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Annotated
+
+import uvicorn
+from litestar import Controller, Litestar, Response, get, post
+from litestar.datastructures import State
+from litestar.di import Provide
+from litestar.openapi import OpenAPIConfig
+from litestar.params import Dependency, FromPath, JSONBody, QueryParameter
+
+from gateway import __version__
+from gateway.authentication import session_auth
+from gateway.controllers.auth import AdminController, AuthController
+from gateway.controllers.health import health
+from gateway.dependencies import AuthedRequest
+from gateway.errors import EXCEPTION_HANDLERS
+from gateway.services.accounts import AccountService
+from gateway.storage.database import Database
+from schemas.accounts import Role
+from schemas.central import CaseDetail, CaseItem, NoteRequest, NoteStatus, RejectionItem
+from schemas.config import CentralConfig, Config
+from schemas.errors import Forbidden
+from schemas.transfer import Peer
+from sync import peers
+from sync.central.cases import CaseService
+from sync.central.endpoint import Endpoint
+from sync.central.files import PartStore
+from sync.central.migrations import central_migrations
+from sync.central.receiver import Receiver
+from sync.keys import SiteKeys, load_keys
+
+log = logging.getLogger("burnedge.central")
+
+
+def center_paths(central: CentralConfig) -> tuple[Path, Path]:
+    """The store and keys folders: as configured, or beside the database."""
+    base = Path(central.database).resolve().parent
+    return (Path(central.store_dir) if central.store_dir else base / "burnedge-central-store",
+            Path(central.keys_dir) if central.keys_dir else base / "burnedge-central-keys")  # fmt: skip
+
+
+def open_center_db(central: CentralConfig) -> Database:
+    db = Database(central.database)
+    db.migrate(central_migrations)
+    return db
+
+
+@dataclass
+class CentralServices:
+    """What the center's handlers get injected as `services` (the account handlers use `accounts` and `db`)."""
+
+    config: Config
+    db: Database
+    keys: SiteKeys
+    accounts: AccountService
+    cases: CaseService
+    receiver: Receiver
+
+    @classmethod
+    def build(cls, config: Config, db: Database) -> CentralServices:
+        store_dir, keys_dir = center_paths(config.central)
+        keys = load_keys(keys_dir)
+        return cls(config=config, db=db, keys=keys, accounts=AccountService(db, config.security),
+                   cases=CaseService(db, keys, PartStore(store_dir / "parts")),
+                   receiver=Receiver(db, config.central, keys, store_dir))  # fmt: skip
+
+
+CentralDep = Annotated["CentralServices", Dependency(skip_validation=True)]
+
+
+class CaseController(Controller):
+    path = "/api/v1/cases"
+    tags = ["cases"]
+
+    @get("/", sync_to_thread=False, summary="Incoming cases: awaiting advice first, then by urgency, oldest first")
+    def list_cases(self, request: AuthedRequest, services: CentralDep,
+                   include_superseded: Annotated[bool, QueryParameter()] = False) -> list[CaseItem]:  # fmt: skip
+        return services.cases.list_cases(request.user, include_superseded=include_superseded)
+
+    @get("/{site_id:str}/{bundle_id:str}", sync_to_thread=False, summary="A case: summary, parts, versions, notes")
+    def case(self, site_id: FromPath[str], bundle_id: FromPath[str], request: AuthedRequest,
+             services: CentralDep) -> CaseDetail:  # fmt: skip
+        return services.cases.case(request.user, site_id, bundle_id)
+
+    @get("/{site_id:str}/{bundle_id:str}/parts/{name:path}", sync_to_thread=True, summary="One file of a case")
+    def part(self, site_id: FromPath[str], bundle_id: FromPath[str], name: FromPath[str], request: AuthedRequest,
+             services: CentralDep) -> Response[bytes]:  # fmt: skip
+        data, media_type = services.cases.part(request.user, site_id, bundle_id, name.lstrip("/"))
+        return Response(content=data, media_type=media_type)
+
+    @post("/{site_id:str}/{bundle_id:str}/notes", sync_to_thread=True, status_code=201,
+          summary="Write advice on a case; it travels to the clinic encrypted and signed")  # fmt: skip
+    def write_note(self, site_id: FromPath[str], bundle_id: FromPath[str], data: JSONBody[NoteRequest],
+                   request: AuthedRequest, services: CentralDep) -> NoteStatus:  # fmt: skip
+        return services.cases.write_note(request.user, site_id, bundle_id, data)
+
+
+class SitesController(Controller):
+    path = "/api/v1"
+    tags = ["sites"]
+
+    @get("/sites", sync_to_thread=False, summary="Enrolled clinics, with fingerprints and revocations")
+    def sites(self, request: AuthedRequest, services: CentralDep) -> list[Peer]:
+        if request.user.role not in (Role.admin, Role.consultant):
+            raise Forbidden("only administrators and consultants see the enrolled sites")
+        return peers.list_peers(services.db)
+
+    @get("/rejections", sync_to_thread=False, summary="What clinics sent that was refused, and why")
+    def rejections(self, request: AuthedRequest, services: CentralDep) -> list[RejectionItem]:
+        return services.cases.rejections(request.user)
+
+
+def create_central_app(config: Config, services: CentralServices) -> Litestar:
+    return Litestar(
+        route_handlers=[health, AuthController, AdminController, CaseController, SitesController],
+        dependencies={"services": Provide(lambda: services, sync_to_thread=False, use_cache=True)},
+        middleware=[session_auth],
+        exception_handlers=EXCEPTION_HANDLERS,
+        openapi_config=OpenAPIConfig(
+            title="burnedge burn center",
+            version=__version__,
+            path="/schema",
+            description="Cases received from clinics and consultants' advice back. "
+            "Decision support, never autonomous decisions.",
+        ),  # fmt: skip
+        state=State({"services": services}),
+    )
+
+
+def serve_central(config: Config) -> None:
+    """`burnedge central`: the Zenoh endpoint and the consultants' API until stopped."""
+    db = open_center_db(config.central)
+    try:
+        services = CentralServices.build(config, db)
+        with Endpoint(db, config.central, services.receiver):
+            log.info("consultants' API on http://%s:%d", config.central.host, config.central.port)
+            uvicorn.run(create_central_app(config, services), host=config.central.host, port=config.central.port,
+                        log_level="warning", access_log=False, timeout_graceful_shutdown=5)  # fmt: skip
+    finally:
+        db.close()

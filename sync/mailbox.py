@@ -1,0 +1,95 @@
+"""Consultants' notes from the center to a clinic: sealed to the clinic, signed by the center, fetched by the clinic.
+
+The clinic asks (it is behind NAT; the center cannot call it), naming the last message it stored; the center
+answers with the messages after it. A note is stored once at the clinic, as a `consultation` record of its
+encounter (audited, in the phones' change feed), in the same transaction that moves the cursor on.
+"""
+
+from __future__ import annotations
+
+import logging
+
+import msgspec
+
+from gateway.storage import audit
+from gateway.storage import records as store
+from gateway.storage.database import Database
+from schemas.base import iso, utcnow
+from schemas.config import Config
+from schemas.errors import TransferRejected
+from schemas.records import RecordKind
+from schemas.transfer import Consultation, ConsultationNote, MailRequest, SealedMessage, SignedEnvelope, SiteIdentity
+from sync.keys import SiteKeys, verify_envelope
+from sync.sealing import open_chunks, seal, unseal_key
+from sync.wire import request
+from sync.zenoh_link import Keys
+
+log = logging.getLogger("burnedge.sync")
+GATEWAY_USER = "gateway"
+
+
+def seal_note(center: SiteKeys, recipient: SiteIdentity, seq: int, note: ConsultationNote) -> SignedEnvelope:
+    sealed = seal(msgspec.json.encode(note), bytes.fromhex(recipient.box_key), _context(recipient.site_id, seq),
+                  1 << 20)  # fmt: skip
+    message = SealedMessage(seq=seq, recipient=recipient.site_id, sealed_key=sealed.sealed_key,
+                            ciphertext=sealed.chunks[0])  # fmt: skip
+    return center.sign("note", message)
+
+
+def open_note(envelope: SignedEnvelope, center: SiteIdentity, own: SiteKeys) -> tuple[int, ConsultationNote]:
+    try:
+        verify_envelope(envelope, center)
+    except Exception as exc:
+        raise TransferRejected(f"a message is not signed by {center.site_id}", code="bad-signature") from exc
+    if envelope.kind != "note" or envelope.signer != center.site_id:
+        raise TransferRejected(f"a {envelope.kind!r} message from {envelope.signer} is not a note", code="bad-kind")
+    message = msgspec.msgpack.decode(envelope.body, type=SealedMessage)
+    if message.recipient != own.site_id:
+        raise TransferRejected(f"note {message.seq} is for {message.recipient}", code="wrong-recipient")
+    key = unseal_key(message.sealed_key, own.box)
+    (plain,) = open_chunks(key, _context(own.site_id, message.seq), [message.ciphertext], 1)
+    return message.seq, msgspec.json.decode(plain, type=ConsultationNote)
+
+
+def fetch(session, link: Keys, db: Database, keys: SiteKeys, center: SiteIdentity, config: Config) -> int:
+    """Ask the center for new notes and store them; returns how many were new."""
+    cursor_key = f"mail_after:{center.site_id}"
+    row = db.connection().execute("SELECT value FROM sync_state WHERE key = ?", (cursor_key,)).fetchone()
+    after = int(row["value"]) if row else 0
+    ask = keys.sign("mail-request", MailRequest(site_id=keys.site_id, center_id=center.site_id, after=after,
+                                                sent_at=iso(utcnow())))  # fmt: skip
+    raw = request(session, link.mail(keys.site_id), msgspec.msgpack.encode(ask), config.sync.query_timeout_s)
+    new = 0
+    for envelope in msgspec.msgpack.decode(raw, type=list[SignedEnvelope]):
+        try:
+            seq, note = open_note(envelope, center, keys)
+        except (TransferRejected, msgspec.DecodeError) as exc:
+            # Skipped, not retried: what fails these checks was not written by the center we trust.
+            log.error("a message from %s was rejected: %s", center.site_id, getattr(exc, "detail", exc))
+            continue
+        new += _store(db, note, center.site_id, seq, cursor_key)
+    return new
+
+
+def _store(db: Database, note: ConsultationNote, center_id: str, seq: int, cursor_key: str) -> int:
+    with db.write() as conn:
+        conn.execute("INSERT INTO sync_state (key, value) VALUES (?, ?) ON CONFLICT (key) DO UPDATE SET value ="
+                     " MAX(CAST(value AS INTEGER), CAST(excluded.value AS INTEGER))", (cursor_key, str(seq)))  # fmt: skip
+        if store.find_head(conn, RecordKind.consultation, note.note_id) is not None:
+            return 0
+        record = Consultation(encounter_id=note.encounter_id, note=note, received_at=iso(utcnow()),
+                              signed_by=center_id)  # fmt: skip
+        data = msgspec.json.encode(record)
+        store.insert_version(conn, kind=RecordKind.consultation, record_id=note.note_id, version=1,
+                             parent_id=note.encounter_id, data_json=data, created_at=None, updated_by=GATEWAY_USER,
+                             device_id=None)  # fmt: skip
+        audit.append(conn, action="consultation.receive", user_id=None, device_id=None,
+                     kind=RecordKind.consultation.value, record_id=note.note_id, after_version=1,
+                     content_hash=store.version_content_hash(data.decode(), False, None),
+                     detail=f"from {note.consultant} at {center_id}: {note.recommendation.value}")  # fmt: skip
+    log.info("consultation note %s from %s for encounter %s stored", note.note_id, note.consultant, note.encounter_id)
+    return 1
+
+
+def _context(recipient: str, seq: int) -> str:
+    return f"mail/{recipient}/{seq}"

@@ -1,0 +1,73 @@
+"""End-to-end encryption of what travels between sites, from libsodium's primitives (PyNaCl); none written here.
+
+A bundle gets a fresh 256-bit key. Each chunk of it is encrypted with XChaCha20-Poly1305 under that key with a
+random nonce and the bundle id, chunk index and chunk count as associated data, so a chunk cannot be moved to
+another place or bundle unnoticed. The key is sealed to the recipient's X25519 key (libsodium sealed box), so
+only the recipient can open it; relays carry ciphertext only.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from collections.abc import Iterable, Iterator
+from dataclasses import dataclass
+
+from nacl.exceptions import CryptoError
+from nacl.public import PrivateKey, PublicKey, SealedBox
+from nacl.secret import Aead
+from nacl.utils import random
+
+from schemas.errors import TransferRejected
+from schemas.transfer import ChunkRef
+
+KEY_BYTES = Aead.KEY_SIZE
+OVERHEAD = Aead.NONCE_SIZE + Aead.MACBYTES
+"""Bytes each encrypted chunk adds to its plaintext."""
+
+
+@dataclass(frozen=True)
+class Sealed:
+    sealed_key: bytes
+    chunks: list[bytes]
+
+    @property
+    def refs(self) -> list[ChunkRef]:
+        return [ChunkRef(sha256=hashlib.sha256(c).hexdigest(), size=len(c)) for c in self.chunks]
+
+
+def seal(plaintext: bytes, recipient_box_key: bytes, context: str, chunk_size: int) -> Sealed:
+    """Encrypt `plaintext` in chunks of `chunk_size` under a fresh key sealed to the recipient."""
+    key = random(KEY_BYTES)
+    box = Aead(key)
+    count = max(1, -(-len(plaintext) // chunk_size))
+    view = memoryview(plaintext)
+    chunks = [
+        bytes(box.encrypt(bytes(view[i * chunk_size : (i + 1) * chunk_size]), _aad(context, i, count)))
+        for i in range(count)
+    ]
+    return Sealed(sealed_key=SealedBox(PublicKey(recipient_box_key)).encrypt(key), chunks=chunks)
+
+
+def unseal_key(sealed_key: bytes, own_box: PrivateKey) -> bytes:
+    try:
+        key = SealedBox(own_box).decrypt(sealed_key)
+    except CryptoError as exc:
+        raise TransferRejected("the bundle key is not sealed to this site's key", code="wrong-recipient") from exc
+    if len(key) != KEY_BYTES:
+        raise TransferRejected("the sealed bundle key has the wrong length", code="bad-key")
+    return key
+
+
+def open_chunks(key: bytes, context: str, chunks: Iterable[bytes], count: int) -> Iterator[bytes]:
+    """The plaintext of each chunk in order; raises TransferRejected on the first one that fails to authenticate."""
+    box = Aead(key)
+    for index, chunk in enumerate(chunks):
+        try:
+            yield box.decrypt(chunk, _aad(context, index, count))
+        except CryptoError as exc:
+            raise TransferRejected(f"chunk {index} of {context} fails authentication (altered or misplaced)",
+                                   code="chunk-forged") from exc  # fmt: skip
+
+
+def _aad(context: str, index: int, count: int) -> bytes:
+    return f"burnedge/{context}/{index}/{count}".encode()

@@ -1,0 +1,149 @@
+"""The clinic's sync round: connect out to the center, deliver queued bundles, fetch the consultants' advice.
+
+Each bundle: announce the signed manifest (the center answers with the chunks it already holds), send the rest
+with a window of requests in flight, then ask the center to commit; only its signed receipt marks the bundle
+delivered. A round that loses the link stops; the next round resumes from what the center holds.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import logging
+import time
+from collections import deque
+from dataclasses import dataclass, field
+
+import msgspec
+import zenoh
+
+from gateway.storage.database import Database
+from schemas.config import Config
+from schemas.errors import TransferRejected
+from schemas.transfer import (
+    AnnounceReply,
+    ChunkRef,
+    CommitReply,
+    Receipt,
+    SignedEnvelope,
+    SiteIdentity,
+    TransferManifest,
+)
+from sync import mailbox, peers
+from sync.keys import SiteKeys, verify_envelope
+from sync.outbox import Outbox
+from sync.wire import LinkDown, error_text, request
+from sync.zenoh_link import Keys, clinic_session_config
+
+log = logging.getLogger("burnedge.sync")
+_PROGRESS_EVERY_S = 1.0
+
+
+@dataclass
+class RoundReport:
+    delivered: list[str] = field(default_factory=list)
+    rejected: dict[str, str] = field(default_factory=dict)
+    notes_received: int = 0
+    chunks_sent: int = 0
+
+
+class Sender:
+    def __init__(self, db: Database, config: Config, keys: SiteKeys):
+        self.db = db
+        self.config = config
+        self.keys = keys
+        self.outbox = Outbox(db, config)
+
+    def run_round(self) -> RoundReport:
+        """One round over one session; raises LinkDown when the center cannot be reached or stops answering."""
+        report = RoundReport()
+        center = peers.only_center(self.db.connection(), self.config.sync.center_id)
+        link = Keys(self.config.sync.key_prefix, center.site_id)
+        try:
+            session_cm = zenoh.open(clinic_session_config(self.config.sync))
+        except zenoh.ZError as exc:
+            raise LinkDown(f"cannot reach the burn center at {', '.join(self.config.sync.center_endpoints)}: "
+                           f"{str(exc).split(' at /')[0]}") from exc  # fmt: skip
+        with session_cm as session:
+            for row in self.outbox.pending():
+                try:
+                    self._deliver(session, link, center, row, report)
+                except TransferRejected as exc:
+                    log.warning("center %s rejected bundle %s: %s", center.site_id, row["bundle_id"], exc.detail)
+                    self.outbox.failed_attempt(row["bundle_id"], f"rejected by the center: {exc.detail}")
+                    report.rejected[row["bundle_id"]] = exc.detail
+                except LinkDown as exc:
+                    self.outbox.failed_attempt(row["bundle_id"], exc.detail)
+                    raise
+            report.notes_received = mailbox.fetch(session, link, self.db, self.keys, center, self.config)
+        return report
+
+    def _deliver(self, session, link: Keys, center: SiteIdentity, row, report: RoundReport) -> None:
+        bundle_id = row["bundle_id"]
+        envelope_bytes = bytes(row["envelope"])
+        timeout = self.config.sync.query_timeout_s
+        reply = msgspec.msgpack.decode(request(session, link.announce(self.keys.site_id), envelope_bytes, timeout),
+                                       type=AnnounceReply)  # fmt: skip
+        if reply.status == "stored" and reply.receipt is not None:
+            self._accept_receipt(center, row, reply.receipt)
+            report.delivered.append(bundle_id)
+            return
+        manifest_refs = msgspec.msgpack.decode(self.outbox.envelope(row).body, type=TransferManifest).chunks
+        for _ in range(3):  # a center that lost unsynced chunks in a crash says which are missing at commit
+            need = [i for i in range(len(manifest_refs)) if i not in set(reply.held)]
+            report.chunks_sent += self._send_chunks(session, link, row, manifest_refs, need, len(reply.held))
+            commit = msgspec.msgpack.decode(
+                request(session, link.commit(self.keys.site_id, bundle_id), b"", timeout), type=CommitReply
+            )
+            if commit.status == "stored" and commit.receipt is not None:
+                self._accept_receipt(center, row, commit.receipt)
+                report.delivered.append(bundle_id)
+                return
+            reply = AnnounceReply(status="send", held=[i for i in range(len(manifest_refs)) if i not in commit.missing])
+        raise TransferRejected(f"the center still misses chunks of {bundle_id} after three sends", code="incomplete")
+
+    def _send_chunks(self, session, link: Keys, row, refs: list[ChunkRef], need: list[int], held: int) -> int:
+        bundle_id, timeout = row["bundle_id"], self.config.sync.query_timeout_s
+        window: deque = deque()
+        acked, last_saved = held, time.monotonic()
+
+        def settle() -> None:
+            nonlocal acked, last_saved
+            index, pending = window.popleft()
+            for reply in pending:
+                if reply.ok is None:
+                    raise TransferRejected(f"chunk {index}: {error_text(reply)}", code="chunk-refused")
+                acked += 1
+                break
+            else:
+                raise LinkDown(f"chunk {index} of bundle {bundle_id} got no acknowledgement within {timeout:g} s")
+            if time.monotonic() - last_saved > _PROGRESS_EVERY_S:
+                self.outbox.progress(bundle_id, acked)
+                last_saved = time.monotonic()
+
+        for index in need:
+            if len(window) >= self.config.sync.window_chunks:
+                settle()
+            key = link.chunk(self.keys.site_id, bundle_id, index, refs[index].sha256)
+            window.append((index, session.get(key, payload=self.outbox.chunk(bundle_id, index), timeout=timeout)))
+        while window:
+            settle()
+        self.outbox.progress(bundle_id, acked)
+        return len(need)
+
+    def _accept_receipt(self, center: SiteIdentity, row, receipt_env: SignedEnvelope) -> None:
+        try:
+            verify_envelope(receipt_env, center)
+            receipt = msgspec.msgpack.decode(receipt_env.body, type=Receipt)
+        except Exception as exc:
+            raise TransferRejected(f"the receipt for {row['bundle_id']} is not signed by {center.site_id}",
+                                   code="bad-receipt") from exc  # fmt: skip
+        body_sha = hashlib.sha256(self.outbox.envelope(row).body).hexdigest()
+        if (
+            receipt_env.kind != "receipt"
+            or receipt.bundle_id != row["bundle_id"]
+            or receipt.manifest_sha256 != body_sha
+        ):
+            raise TransferRejected(f"the receipt does not match bundle {row['bundle_id']}", code="bad-receipt")
+        self.outbox.delivered(row["bundle_id"], receipt_env)
+        log.info("bundle %s delivered to %s%s", row["bundle_id"], center.site_id,
+                 " (it was already stored)" if receipt.duplicate else "")  # fmt: skip

@@ -1,0 +1,123 @@
+"""The clinic's store-and-forward as the gateway uses it: queue a case, run a round when due, report status.
+
+Rounds are driven by the gateway's APScheduler job every [sync] interval_s. After a failed round the next one
+waits retry_base_s x 2^(failures-1), capped at retry_max_s, with full random jitter (so many clinics coming back
+after an outage do not all call at once); a clinician queueing a case starts a round at once.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import logging
+import random
+import threading
+from pathlib import Path
+
+from gateway.storage.database import Database
+from schemas.base import iso, utcnow
+from schemas.config import Config
+from schemas.errors import BurnedgeError
+from schemas.transfer import OutboxEntry, OutboxState, SyncStatus
+from sync import peers
+from sync.keys import SiteKeys, load_keys
+from sync.outbox import Outbox
+from sync.sender import RoundReport, Sender
+from sync.wire import LinkDown
+
+log = logging.getLogger("burnedge.sync")
+
+
+def keys_dir(config: Config) -> Path:
+    if config.sync.keys_dir:
+        return Path(config.sync.keys_dir)
+    return Path(config.gateway.database).resolve().parent / "burnedge-keys"
+
+
+class SyncService:
+    def __init__(self, db: Database, config: Config):
+        self.db = db
+        self.config = config
+        self.outbox = Outbox(db, config)
+        self._round_lock = threading.Lock()
+
+    def keys(self) -> SiteKeys:
+        return load_keys(keys_dir(self.config))
+
+    def queue(self, encounter_id: str, user: str) -> OutboxEntry:
+        return self.outbox.queue(self.keys(), encounter_id, user)
+
+    def run_round(self, *, force: bool = False) -> RoundReport | None:
+        """One round unless the backoff says wait (`force` ignores it); None when skipped or already running."""
+        if not force and not self._due():
+            return None
+        if not self._round_lock.acquire(blocking=False):
+            return None
+        try:
+            report = Sender(self.db, self.config, self.keys()).run_round()
+        except (LinkDown, BurnedgeError) as exc:
+            self._failed(exc.detail)
+            log.warning("sync round failed: %s", exc.detail)
+            if not isinstance(exc, LinkDown):
+                raise
+            return None
+        finally:
+            self._round_lock.release()
+        self._succeeded()
+        if report.delivered or report.notes_received or report.rejected:
+            log.info("sync round: %d delivered, %d notes received, %d rejected", len(report.delivered),
+                     report.notes_received, len(report.rejected))  # fmt: skip
+        return report
+
+    def scheduled_round(self, force: bool = False) -> None:
+        """For the scheduler: a failure is recorded (status, backoff) and logged, never raised."""
+        try:
+            self.run_round(force=force)
+        except BurnedgeError:
+            pass  # run_round recorded and logged it
+
+    def status(self) -> SyncStatus:
+        state = self._state()
+        conn = self.db.connection()
+        counts = dict(conn.execute("SELECT state, COUNT(*) FROM outbox GROUP BY state").fetchall())
+        try:
+            site_id = self.keys().site_id
+        except BurnedgeError:
+            site_id = None
+        try:
+            center_id = peers.only_center(conn, self.config.sync.center_id).site_id
+        except BurnedgeError:
+            center_id = None
+        return SyncStatus(enabled=self.config.sync.enabled, site_id=site_id, center_id=center_id,
+                          queued=counts.get(OutboxState.queued.value, 0),
+                          delivered=counts.get(OutboxState.delivered.value, 0),
+                          last_round_at=state.get("last_round_at"), last_success_at=state.get("last_success_at"),
+                          last_error=state.get("last_error"), next_round_at=state.get("next_round_at"),
+                          failures_in_a_row=int(state.get("failures", 0)))  # fmt: skip
+
+    # backoff state ----------------------------------------------------------------
+    def _state(self) -> dict[str, str]:
+        rows = self.db.connection().execute("SELECT key, value FROM sync_state WHERE key NOT LIKE 'mail_after:%'")
+        return {r["key"]: r["value"] for r in rows}
+
+    def _due(self) -> bool:
+        nxt = self._state().get("next_round_at")
+        return nxt is None or dt.datetime.fromisoformat(nxt) <= utcnow()
+
+    def _failed(self, reason: str) -> None:
+        failures = int(self._state().get("failures", 0)) + 1
+        cap = min(self.config.sync.retry_max_s, self.config.sync.retry_base_s * 2 ** (failures - 1))
+        wait = random.uniform(0, cap)
+        now = utcnow()
+        self._put(last_round_at=iso(now), last_error=reason, failures=str(failures),
+                  next_round_at=iso(now + dt.timedelta(seconds=wait)))  # fmt: skip
+
+    def _succeeded(self) -> None:
+        now = iso(utcnow())
+        self._put(last_round_at=now, last_success_at=now, failures="0", next_round_at=now)
+        with self.db.write() as conn:
+            conn.execute("DELETE FROM sync_state WHERE key = 'last_error'")
+
+    def _put(self, **values: str) -> None:
+        with self.db.write() as conn:
+            conn.executemany("INSERT INTO sync_state (key, value) VALUES (?, ?) ON CONFLICT (key) DO UPDATE SET"
+                             " value = excluded.value", list(values.items()))  # fmt: skip

@@ -1,0 +1,86 @@
+"""Zenoh sessions and key expressions, in one place.
+
+A clinic opens a client session that connects out to the center's endpoints (it sits behind NAT); the center
+listens as a router. Either starts from an optional Zenoh JSON5 file (TLS certificates, transport tuning) with
+the endpoints and mode from burnedge's own config laid over it. Multicast scouting is off: sites are found by
+their configured endpoints only, never by whoever answers on the local network.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+
+import zenoh
+
+from schemas.config import CentralConfig, SyncConfig
+from schemas.errors import InvalidInput
+
+
+def _base(path: str) -> zenoh.Config:
+    if not path:
+        return zenoh.Config()
+    try:
+        return zenoh.Config.from_file(path)
+    except Exception as exc:  # zenoh raises its own ZError for unreadable or invalid files
+        raise InvalidInput(f"Zenoh config file {path} could not be read: {exc}") from exc
+
+
+def _set(conf: zenoh.Config, key: str, value) -> None:
+    try:
+        conf.insert_json5(key, json.dumps(value))
+    except Exception as exc:
+        raise InvalidInput(f"Zenoh setting {key} = {value!r} is not valid: {exc}") from exc
+
+
+def clinic_session_config(sync: SyncConfig) -> zenoh.Config:
+    if not sync.center_endpoints:
+        raise InvalidInput("[sync] center_endpoints is empty: set the burn center's Zenoh endpoint, "
+                           "e.g. tcp/203.0.113.5:7447")  # fmt: skip
+    conf = _base(sync.zenoh_config)
+    _set(conf, "mode", "client")
+    _set(conf, "connect/endpoints", list(sync.center_endpoints))
+    _set(conf, "connect/timeout_ms", int(sync.connect_timeout_s * 1000))
+    _set(conf, "connect/exit_on_failure", True)
+    _set(conf, "scouting/multicast/enabled", False)
+    return conf
+
+
+def center_session_config(central: CentralConfig) -> zenoh.Config:
+    conf = _base(central.zenoh_config)
+    _set(conf, "mode", "router")
+    _set(conf, "listen/endpoints", list(central.listen_endpoints))
+    _set(conf, "scouting/multicast/enabled", False)
+    return conf
+
+
+@dataclass(frozen=True)
+class Keys:
+    """The key expressions of one center: `{prefix}/{center_id}/{verb}/...`."""
+
+    prefix: str
+    center_id: str
+
+    @property
+    def all(self) -> str:
+        return f"{self.prefix}/{self.center_id}/**"
+
+    def announce(self, site_id: str) -> str:
+        return f"{self.prefix}/{self.center_id}/announce/{site_id}"
+
+    def chunk(self, site_id: str, bundle_id: str, index: int, sha256: str) -> str:
+        return f"{self.prefix}/{self.center_id}/chunk/{site_id}/{bundle_id}/{index}/{sha256}"
+
+    def commit(self, site_id: str, bundle_id: str) -> str:
+        return f"{self.prefix}/{self.center_id}/commit/{site_id}/{bundle_id}"
+
+    def mail(self, site_id: str) -> str:
+        return f"{self.prefix}/{self.center_id}/mail/{site_id}"
+
+    def parse(self, key: str) -> tuple[str, list[str]]:
+        """The verb and the rest of a key under this center; raises ValueError for anything else."""
+        head = f"{self.prefix}/{self.center_id}/"
+        if not key.startswith(head):
+            raise ValueError(f"key {key} is not under {head}")
+        verb, *rest = key[len(head) :].split("/")
+        return verb, rest

@@ -1,0 +1,132 @@
+"""A clinic gateway and a burn center as real processes on loopback, set up the way an IT person would: keys made
+and enrolled with the command line, accounts added, the clinic configured to connect out to the center."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import cv2
+import httpx
+import numpy as np
+
+from gateway.demo_client import GatewayClient
+from tests.conftest import FAST_HASH_ENV, PASSWORD, REPO, GatewayProcess, add_user_cli, free_port
+
+CLINIC = "clinic-test"
+CENTER = "center-test"
+
+
+def cli(*args: str, env: dict[str, str] | None = None, stdin: str | None = None) -> str:
+    r = subprocess.run([sys.executable, "-m", "gateway.cli", *args], capture_output=True, text=True, cwd=REPO,
+                       input=stdin, env={**os.environ, **FAST_HASH_ENV, **(env or {})}, timeout=120)  # fmt: skip
+    if r.returncode != 0:
+        raise RuntimeError(f"burnedge {' '.join(args)} failed: {r.stderr}")
+    return r.stdout
+
+
+def noise_photo(path: Path, seed: int, size: tuple[int, int] = (1600, 1200), quality: int = 92) -> Path:
+    """A photo-sized JPEG of smooth colour noise (incompressible enough to give megabytes)."""
+    rng = np.random.default_rng(seed)
+    small = rng.integers(0, 255, (size[1] // 2, size[0] // 2, 3), dtype=np.uint8)
+    image = cv2.resize(small, size, interpolation=cv2.INTER_LINEAR)
+    image = cv2.add(image, rng.integers(0, 40, image.shape, dtype=np.uint8))
+    cv2.imwrite(str(path), image, [cv2.IMWRITE_JPEG_QUALITY, quality])
+    return path
+
+
+class CenterProcess:
+    def __init__(self, folder: Path, zenoh_port: int, http_port: int):
+        self.folder = folder
+        self.env = {"BURNEDGE_CENTRAL_DATABASE": str(folder / "center.sqlite3"),
+                    "BURNEDGE_CENTRAL_LISTEN_ENDPOINTS": f"tcp/127.0.0.1:{zenoh_port}",
+                    "BURNEDGE_CENTRAL_PORT": str(http_port)}  # fmt: skip
+        self.url = f"http://127.0.0.1:{http_port}"
+        self.log = folder / "center.log"
+        self.proc: subprocess.Popen | None = None
+
+    def start(self, timeout: float = 30.0, prefix: list[str] | None = None) -> CenterProcess:
+        with open(self.log, "ab") as log:
+            self.proc = subprocess.Popen([*(prefix or []), sys.executable, "-m", "gateway.cli", "central", "--site-id",
+                                          CENTER, "--name", "Test burn center"], cwd=REPO, stdout=log,
+                                         stderr=subprocess.STDOUT, env={**os.environ, **FAST_HASH_ENV, **self.env})  # fmt: skip
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            if self.proc.poll() is not None:
+                raise RuntimeError(f"center exited early: {self.log.read_text(errors='replace')[-3000:]}")
+            try:
+                if httpx.get(self.url + "/health", timeout=1).status_code == 200:
+                    return self
+            except httpx.HTTPError:
+                time.sleep(0.1)
+        raise RuntimeError("center did not become healthy in time")
+
+    def kill(self) -> None:
+        if self.proc and self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGKILL)
+            self.proc.wait()
+
+    def stop(self) -> None:
+        if self.proc and self.proc.poll() is None:
+            self.proc.terminate()
+            try:
+                self.proc.wait(15)
+            except subprocess.TimeoutExpired:
+                self.kill()
+
+
+class Sites:
+    """Both sites' files under `folder`; neither process is started."""
+
+    def __init__(self, folder: Path, *, center_endpoint: str | None = None, zenoh_port: int | None = None):
+        self.folder = folder
+        self.zenoh_port = zenoh_port or free_port()
+        self.center = CenterProcess(folder, self.zenoh_port, free_port())
+        self.gateway = GatewayProcess(folder / "clinic.sqlite3", free_port())
+        self.gateway.env.update({
+            "BURNEDGE_SYNC_ENABLED": "true",
+            "BURNEDGE_SYNC_CENTER_ENDPOINTS": center_endpoint or f"tcp/127.0.0.1:{self.zenoh_port}",
+            "BURNEDGE_SYNC_INTERVAL_S": "0.5", "BURNEDGE_SYNC_RETRY_BASE_S": "0.2", "BURNEDGE_SYNC_RETRY_MAX_S": "1",
+            "BURNEDGE_SYNC_CONNECT_TIMEOUT_S": "2", "BURNEDGE_SYNC_QUERY_TIMEOUT_S": "20",
+            "BURNEDGE_JOBS_WORKERS": "0",
+        })  # fmt: skip
+
+    def set_up(self) -> None:
+        db = str(self.gateway.db)
+        cli("--db", db, "keys", "init", "--site-id", CLINIC, "--name", "Test field clinic")
+        cli("keys", "init", "--center", "--site-id", CENTER, "--name", "Test burn center", env=self.center.env)
+        keys = self.folder / "burnedge-keys" / "site.pub.json"
+        center_keys = self.folder / "burnedge-central-keys" / "site.pub.json"
+        cli("--db", db, "peers", "enrol", str(center_keys), "--by", "it-person")
+        cli("peers", "enrol", "--center", str(keys), "--by", "it-person", env=self.center.env)
+        add_user_cli(self.gateway.db, "clin", "clinician")
+        cli("users", "add", "--center", "--username", "consult", "--role", "consultant", "--name", "Dr Consultant",
+            "--password-stdin", env=self.center.env, stdin=PASSWORD + "\n")  # fmt: skip
+
+    def clinic_client(self) -> GatewayClient:
+        client = GatewayClient(self.gateway.url)
+        client.login("clin", PASSWORD)
+        return client
+
+    def center_client(self) -> GatewayClient:
+        client = GatewayClient(self.center.url)
+        client.login("consult", PASSWORD)
+        return client
+
+    def stop(self) -> None:
+        self.gateway.stop()
+        self.center.stop()
+
+
+def wait_for(predicate, timeout: float, what: str, every: float = 0.2):
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        value = predicate()
+        if value:
+            return value
+        time.sleep(every)
+    raise AssertionError(f"timed out after {timeout:g} s waiting for {what}")
