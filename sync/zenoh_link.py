@@ -3,7 +3,7 @@
 A clinic opens a client session that connects out to the center's endpoints (it sits behind NAT); the center
 listens as a router. Either starts from an optional Zenoh JSON5 file (TLS certificates, transport tuning) with
 the endpoints and mode from burnedge's own config laid over it. Multicast scouting is off: sites are found by
-their configured endpoints only, never by whoever answers on the local network.
+their configured endpoints only, never by whoever answers on the local network. Shared memory is off too.
 """
 
 from __future__ import annotations
@@ -42,15 +42,22 @@ def clinic_session_config(sync: SyncConfig) -> zenoh.Config:
     _set(conf, "connect/endpoints", list(sync.center_endpoints))
     _set(conf, "connect/timeout_ms", int(sync.connect_timeout_s * 1000))
     _set(conf, "connect/exit_on_failure", True)
-    _set(conf, "scouting/multicast/enabled", False)
+    _no_discovery_no_shm(conf)
     return conf
+
+
+def _no_discovery_no_shm(conf: zenoh.Config) -> None:
+    _set(conf, "scouting/multicast/enabled", False)
+    # A clinic and its center are never one machine. On one machine (tests, benchmarks) Zenoh would pass large
+    # payloads through shared memory and bypass the network that store-and-forward exists for.
+    _set(conf, "transport/shared_memory/enabled", False)
 
 
 def center_session_config(central: CentralConfig) -> zenoh.Config:
     conf = _base(central.zenoh_config)
     _set(conf, "mode", "router")
     _set(conf, "listen/endpoints", list(central.listen_endpoints))
-    _set(conf, "scouting/multicast/enabled", False)
+    _no_discovery_no_shm(conf)
     return conf
 
 

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.conftest import encounter_body, patient_body
+from tests.conftest import encounter_body, free_port, patient_body
 from tests.sync_sites import Sites, noise_photo, wait_for
 
 pytestmark = pytest.mark.server
@@ -84,3 +84,53 @@ def test_case_arrives_intact_and_advice_comes_back(sites: Sites, tmp_path: Path)
     with sqlite3.connect(sites.center.env["BURNEDGE_CENTRAL_DATABASE"]) as db:
         assert db.execute("SELECT COUNT(*) FROM bundles").fetchone()[0] == 2
         assert db.execute("SELECT COUNT(*) FROM incoming").fetchone()[0] == 0
+
+
+def sent_chunks(client, encounter_id: str) -> int:
+    entries = client.get(f"/api/v1/encounters/{encounter_id}/transfers", "transfers")
+    return entries[0]["sent_chunks"] if entries and entries[0]["state"] == "queued" else 0
+
+
+def test_sigkill_of_either_side_mid_transfer_still_stores_each_bundle_once(tmp_path: Path):
+    from tests.poor_link import ThrottlingProxy
+
+    zenoh_port = free_port()
+    with ThrottlingProxy("127.0.0.1", zenoh_port, rate_kbit=4000) as proxy:  # ~1 s per 0.5 MB: time to kill
+        sites = Sites(tmp_path, center_endpoint=f"tcp/127.0.0.1:{proxy.port}", zenoh_port=zenoh_port)
+        sites.gateway.env["BURNEDGE_SYNC_CHUNK_KIB"] = "64"
+        sites.set_up()
+        try:
+            sites.center.start()
+            sites.gateway.start()
+            clinic = sites.clinic_client()
+            first, first_photos = record_case(clinic, tmp_path, photos=3, seed=1)
+            clinic.http.post(f"/api/v1/encounters/{first}/transfers")
+            wait_for(lambda: sent_chunks(clinic, first) >= 4, 60, "the first chunks acknowledged")
+            sites.center.kill()
+            sites.center.start()
+            one = wait_for(lambda: delivered(clinic, first, 1), 120, "delivery after the center's restart")
+
+            second, second_photos = record_case(clinic, tmp_path, photos=3, seed=2)
+            clinic.http.post(f"/api/v1/encounters/{second}/transfers")
+            wait_for(lambda: sent_chunks(clinic, second) >= 4, 60, "the second bundle's first chunks")
+            sites.gateway.proc.kill()
+            sites.gateway.proc.wait()
+            sites.gateway.start()
+            clinic = sites.clinic_client()
+            two = wait_for(lambda: delivered(clinic, second, 1), 120, "delivery after the clinic's restart")
+
+            center = sites.center_client()
+            for entry, photos in ((one, first_photos), (two, second_photos)):
+                detail = center.get(f"/api/v1/cases/clinic-test/{entry['bundle_id']}", "case")
+                got = sorted(center.http.get(f"/api/v1/cases/clinic-test/{entry['bundle_id']}/parts/{p['name']}")
+                             .content for p in detail["manifest"]["parts"] if p["name"].startswith("photos/"))  # fmt: skip
+                assert got == sorted(p.read_bytes() for p in photos)
+        finally:
+            sites.stop()
+    with sqlite3.connect(sites.center.env["BURNEDGE_CENTRAL_DATABASE"]) as db:
+        rows = db.execute("SELECT bundle_id, COUNT(*) FROM bundles GROUP BY bundle_id").fetchall()
+        assert sorted(r[0] for r in rows) == sorted([one["bundle_id"], two["bundle_id"]])
+        assert all(count == 1 for _, count in rows)
+        assert db.execute("SELECT COUNT(*) FROM incoming").fetchone()[0] == 0
+    staging = tmp_path / "burnedge-central-store" / "incoming"
+    assert not any(p.is_file() for p in staging.rglob("*")), "staged chunks left behind"
