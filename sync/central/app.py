@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import Annotated
 
 import uvicorn
+from apscheduler.schedulers.background import BackgroundScheduler
 from litestar import Controller, Litestar, Response, get, post
 from litestar.datastructures import State
 from litestar.di import Provide
@@ -23,6 +24,7 @@ from gateway.errors import EXCEPTION_HANDLERS
 from gateway.services.accounts import AccountService
 from gateway.storage.database import Database
 from schemas.accounts import Role
+from schemas.base import utcnow
 from schemas.central import CaseDetail, CaseItem, NoteRequest, NoteStatus, RejectionItem
 from schemas.config import CentralConfig, Config
 from schemas.errors import Forbidden
@@ -138,9 +140,14 @@ def serve_central(config: Config) -> None:
     db = open_center_db(config.central)
     try:
         services = CentralServices.build(config, db)
+        scheduler = BackgroundScheduler(daemon=True)
+        scheduler.add_job(services.receiver.drop_stale, "interval", hours=6, args=[config.central.stale_transfer_days],
+                          id="drop-stale-transfers", coalesce=True, max_instances=1, next_run_time=utcnow())  # fmt: skip
+        scheduler.start()
         with Endpoint(db, config.central, services.receiver):
             log.info("consultants' API on http://%s:%d", config.central.host, config.central.port)
             uvicorn.run(create_central_app(config, services), host=config.central.host, port=config.central.port,
                         log_level="warning", access_log=False, timeout_graceful_shutdown=5)  # fmt: skip
+        scheduler.shutdown(wait=True)
     finally:
         db.close()

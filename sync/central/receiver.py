@@ -7,6 +7,7 @@ clinic re-sends, each bundle version is stored once: a stored bundle is answered
 
 from __future__ import annotations
 
+import datetime as dt
 import hashlib
 import logging
 import os
@@ -190,6 +191,17 @@ class Receiver:
             rows = conn.execute("SELECT message FROM notes WHERE site_id = ? AND seq > ? AND message IS NOT NULL"
                                 " ORDER BY seq LIMIT ?", (site_id, ask.after, MAIL_PAGE)).fetchall()  # fmt: skip
         return [_envelope.decode(r["message"]) for r in rows]
+
+    def drop_stale(self, days: float) -> int:
+        """Forget transfers announced more than `days` ago and never committed (the clinic may announce again)."""
+        cutoff = iso(utcnow() - dt.timedelta(days=days))
+        rows = self.db.connection().execute("SELECT site_id, bundle_id FROM incoming WHERE announced_at < ?",
+                                            (cutoff,)).fetchall()  # fmt: skip
+        for row in rows:
+            self._drop_incoming(row["site_id"], row["bundle_id"])
+            log.info("dropped the unfinished transfer of %s from %s (announced before %s)", row["bundle_id"],
+                     row["site_id"], cutoff)  # fmt: skip
+        return len(rows)
 
     # checks -------------------------------------------------------------------------
     def _verified(self, site_id: str, payload: bytes, kind: str) -> tuple[SignedEnvelope, SiteIdentity]:

@@ -1,0 +1,96 @@
+"""The pieces of store-and-forward on their own: keys, sealing, the bundle container, stale transfers."""
+
+from __future__ import annotations
+
+import datetime as dt
+from pathlib import Path
+
+import msgspec
+import pytest
+
+from schemas.errors import InvalidInput, TransferRejected
+from schemas.transfer import SiteRole
+from sync import bundle
+from sync.keys import check_identity, fingerprint, init_keys, load_keys
+from sync.sealing import open_chunks, seal, unseal_key
+from tests.test_sync_rejections import SUMMARY
+
+
+def test_keys_are_kept_private_and_their_identity_is_self_signed(tmp_path: Path):
+    keys = init_keys(tmp_path, "clinic-a", SiteRole.clinic, "Clinic A")
+    assert (tmp_path / "site.key").stat().st_mode & 0o777 == 0o600
+    assert load_keys(tmp_path).identity == keys.identity
+    check_identity(keys.identity)
+    other = init_keys(tmp_path / "b", "clinic-b", SiteRole.clinic, "Clinic B")
+    swapped = msgspec.structs.replace(keys.identity, box_key=other.identity.box_key)  # someone else's box key
+    with pytest.raises(InvalidInput, match="not valid"):
+        check_identity(swapped)
+    assert fingerprint(keys.identity) != fingerprint(swapped)
+    with pytest.raises(InvalidInput, match="already exists"):
+        init_keys(tmp_path, "clinic-a", SiteRole.clinic, "Clinic A")
+
+
+def test_sealed_chunks_open_only_for_the_recipient_in_their_place(tmp_path: Path):
+    center = init_keys(tmp_path / "c", "center", SiteRole.center, "Center")
+    stranger = init_keys(tmp_path / "s", "stranger", SiteRole.center, "Stranger")
+    plain = bytes(range(256)) * 100
+    sealed = seal(plain, bytes(center.box.public_key), "bundle-1", 4096)
+    key = unseal_key(sealed.sealed_key, center.box)
+    assert b"".join(open_chunks(key, "bundle-1", sealed.chunks, len(sealed.chunks))) == plain
+    with pytest.raises(TransferRejected) as wrong:
+        unseal_key(sealed.sealed_key, stranger.box)
+    assert wrong.value.code == "wrong-recipient"
+    swapped = [sealed.chunks[1], sealed.chunks[0], *sealed.chunks[2:]]
+    with pytest.raises(TransferRejected) as moved:
+        b"".join(open_chunks(key, "bundle-1", swapped, len(swapped)))
+    assert moved.value.code == "chunk-forged"
+    with pytest.raises(TransferRejected):  # the same chunks presented as another bundle's
+        b"".join(open_chunks(key, "bundle-2", sealed.chunks, len(sealed.chunks)))
+
+
+def test_the_container_checks_every_part_against_its_manifest():
+    from schemas.transfer import BundleManifest
+
+    parts = [bundle.PartData("record.json", b"{}"), bundle.PartData("photos/a.jpg", b"\xff\xd8 jpeg bytes")]
+    manifest = BundleManifest(bundle_id="0192f3b4-6a8e-7c3d-9b1a-2f4e5d6c7b8a", site_id="clinic-a",
+                              patient_id="0192f3b4-6a8e-7c3d-9b1a-2f4e5d6c7b8b",
+                              encounter_id="0192f3b4-6a8e-7c3d-9b1a-2f4e5d6c7b8c", version=1, supersedes=None,
+                              created_at="2026-11-22", created_by="clin", summary=SUMMARY,
+                              parts=[p.described for p in parts])  # fmt: skip
+    packed = bundle.pack(manifest, parts)
+    assert bundle.unpack(packed)[1] == {p.name: p.data for p in parts}
+    with pytest.raises(TransferRejected) as altered:
+        bundle.unpack(packed[:-3] + b"XXX")
+    assert altered.value.code == "part-mismatch"
+    with pytest.raises(TransferRejected) as extra:
+        bundle.unpack(packed + b"more")
+    assert extra.value.code == "bad-bundle"
+    evil = msgspec.structs.replace(manifest, parts=[msgspec.structs.replace(manifest.parts[0], name="../../etc/x"),
+                                                    manifest.parts[1]])  # fmt: skip
+    with pytest.raises(TransferRejected, match="safe relative path"):
+        bundle.unpack(bundle.pack(evil, [bundle.PartData("../../etc/x", b"{}"), parts[1]]))
+
+
+def test_unfinished_transfers_are_dropped_after_the_stale_period(tmp_path: Path):
+    from schemas.config import CentralConfig
+    from sync.central.app import open_center_db
+    from sync.central.receiver import Receiver
+
+    central = CentralConfig(database=str(tmp_path / "center.sqlite3"))
+    db = open_center_db(central)
+    keys = init_keys(tmp_path / "keys", "center", SiteRole.center, "Center")
+    receiver = Receiver(db, central, keys, tmp_path / "store")
+    old = (dt.datetime.now(dt.UTC) - dt.timedelta(days=20)).isoformat()
+    with db.write() as conn:
+        for bundle_id, at in (
+            ("0192f3b4-6a8e-7c3d-9b1a-000000000001", old),
+            ("0192f3b4-6a8e-7c3d-9b1a-000000000002", dt.datetime.now(dt.UTC).isoformat()),
+        ):
+            conn.execute("INSERT INTO incoming VALUES (?,?,?,?,?,?,?,?)",
+                         ("clinic-a", bundle_id, b"", "0" * 64, "e", 1, 1, at))  # fmt: skip
+            (tmp_path / "store" / "incoming" / "clinic-a" / bundle_id).mkdir(parents=True)
+    assert receiver.drop_stale(14) == 1
+    left = [r[0] for r in db.connection().execute("SELECT bundle_id FROM incoming")]
+    assert left == ["0192f3b4-6a8e-7c3d-9b1a-000000000002"]
+    assert not (tmp_path / "store" / "incoming" / "clinic-a" / "0192f3b4-6a8e-7c3d-9b1a-000000000001").exists()
+    db.close()
