@@ -131,17 +131,12 @@ class GatewayProcess:
                 [sys.executable, "-m", "gateway.cli", "--db", str(self.db), "serve", "--port", str(self.port)],
                 env=env, stdout=log, stderr=subprocess.STDOUT,
             )  # fmt: skip
-        deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline:
-            if self.proc.poll() is not None:
-                raise RuntimeError(f"gateway exited early: {self.log.read_text(errors='replace')[-4000:]}")
-            try:
-                if httpx.get(self.url + "/health", timeout=1).status_code == 200:
-                    return self
-            except httpx.HTTPError:
-                time.sleep(0.1)
-        self.stop()
-        raise RuntimeError("gateway did not become healthy in time")
+        try:
+            wait_healthy(self.proc, self.url, self.log, timeout, "gateway")
+        except RuntimeError:
+            self.stop()
+            raise
+        return self
 
     def stop(self) -> None:
         if self.proc and self.proc.poll() is None:
@@ -151,6 +146,20 @@ class GatewayProcess:
             except subprocess.TimeoutExpired:
                 self.proc.kill()
                 self.proc.wait()
+
+
+def wait_healthy(proc: subprocess.Popen, url: str, log: Path, timeout: float, what: str) -> None:
+    """Until `url`/health answers 200; RuntimeError with the process's last output if it exits or never does."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if proc.poll() is not None:
+            raise RuntimeError(f"{what} exited early: {log.read_text(errors='replace')[-4000:]}")
+        try:
+            if httpx.get(url + "/health", timeout=1).status_code == 200:
+                return
+        except httpx.HTTPError:
+            time.sleep(0.1)
+    raise RuntimeError(f"{what} did not become healthy in time")
 
 
 @pytest.fixture

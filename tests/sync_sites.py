@@ -11,11 +11,10 @@ import time
 from pathlib import Path
 
 import cv2
-import httpx
 import numpy as np
 
 from gateway.demo_client import GatewayClient
-from tests.conftest import FAST_HASH_ENV, PASSWORD, REPO, GatewayProcess, add_user_cli, free_port
+from tests.conftest import FAST_HASH_ENV, PASSWORD, REPO, GatewayProcess, add_user_cli, free_port, wait_healthy
 
 CLINIC = "clinic-test"
 CENTER = "center-test"
@@ -54,16 +53,8 @@ class CenterProcess:
             self.proc = subprocess.Popen([*(prefix or []), sys.executable, "-m", "gateway.cli", "central", "--site-id",
                                           CENTER, "--name", "Test burn center"], cwd=REPO, stdout=log,
                                          stderr=subprocess.STDOUT, env={**os.environ, **FAST_HASH_ENV, **self.env})  # fmt: skip
-        deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline:
-            if self.proc.poll() is not None:
-                raise RuntimeError(f"center exited early: {self.log.read_text(errors='replace')[-3000:]}")
-            try:
-                if httpx.get(self.url + "/health", timeout=1).status_code == 200:
-                    return self
-            except httpx.HTTPError:
-                time.sleep(0.1)
-        raise RuntimeError("center did not become healthy in time")
+        wait_healthy(self.proc, self.url, self.log, timeout, "center")
+        return self
 
     def kill(self) -> None:
         if self.proc and self.proc.poll() is None:
