@@ -38,7 +38,7 @@ from schemas.transfer import (
 from sync import bundle, peers
 from sync.central.files import PartStore
 from sync.keys import SiteKeys, verify_envelope
-from sync.sealing import open_chunks, unseal_key
+from sync.sealing import OVERHEAD, open_chunks, unseal_key
 
 log = logging.getLogger("burnedge.central")
 _envelope = msgspec.msgpack.Decoder(SignedEnvelope)
@@ -228,7 +228,7 @@ class Receiver:
         if not m.chunks or total > self.config.max_bundle_mib * 1024 * 1024:
             raise TransferRejected(f"bundle {m.bundle_id} of {total} bytes is outside 1 byte..{self.config.max_bundle_mib}"
                                    " MiB ([central] max_bundle_mib)", code="too-large")  # fmt: skip
-        if max(c.size for c in m.chunks) > self.config.max_chunk_kib * 1024:
+        if max(c.size for c in m.chunks) > self.config.max_chunk_kib * 1024 + OVERHEAD:
             raise TransferRejected(f"bundle {m.bundle_id} has chunks over {self.config.max_chunk_kib} KiB",
                                    code="too-large")  # fmt: skip
 
