@@ -30,6 +30,7 @@ def test_migrations_are_recorded_and_applied_once(tmp_path):
         "m004_uploads_and_assets",
         "m005_video_frames",
         "m006_analysis_jobs",
+        "m007_sync",
     ]
     assert db.migrate() == []
     assert db.connection().execute("PRAGMA journal_mode").fetchone()[0] == "wal"
