@@ -25,12 +25,11 @@ from sync.wire import request
 from sync.zenoh_link import Keys
 
 log = logging.getLogger("burnedge.sync")
-GATEWAY_USER = "gateway"
 
 
 def seal_note(center: SiteKeys, recipient: SiteIdentity, seq: int, note: ConsultationNote) -> SignedEnvelope:
-    sealed = seal(msgspec.json.encode(note), bytes.fromhex(recipient.box_key), _context(recipient.site_id, seq),
-                  1 << 20)  # fmt: skip
+    plain = msgspec.json.encode(note)
+    sealed = seal(plain, bytes.fromhex(recipient.box_key), _context(recipient.site_id, seq), max(1, len(plain)))
     message = SealedMessage(seq=seq, recipient=recipient.site_id, sealed_key=sealed.sealed_key,
                             ciphertext=sealed.chunks[0])  # fmt: skip
     return center.sign("note", message)
@@ -79,14 +78,15 @@ def _store(db: Database, note: ConsultationNote, center_id: str, seq: int, curso
             return 0
         record = Consultation(encounter_id=note.encounter_id, note=note, received_at=iso(utcnow()),
                               signed_by=center_id)  # fmt: skip
-        data = msgspec.json.encode(record)
-        store.insert_version(conn, kind=RecordKind.consultation, record_id=note.note_id, version=1,
-                             parent_id=note.encounter_id, data_json=data, created_at=None, updated_by=GATEWAY_USER,
-                             device_id=None)  # fmt: skip
-        audit.append(conn, action="consultation.receive", user_id=None, device_id=None,
-                     kind=RecordKind.consultation.value, record_id=note.note_id, after_version=1,
-                     content_hash=store.version_content_hash(data.decode(), False, None),
-                     detail=f"from {note.consultant} at {center_id}: {note.recommendation.value}")  # fmt: skip
+        audit.insert_server_record(
+            conn,
+            kind=RecordKind.consultation,
+            record_id=note.note_id,
+            parent_id=note.encounter_id,
+            data=msgspec.json.encode(record),
+            action="consultation.receive",
+            detail=f"from {note.consultant} at {center_id}: {note.recommendation.value}",
+        )
     log.info("consultation note %s from %s for encounter %s stored", note.note_id, note.consultant, note.encounter_id)
     return 1
 

@@ -49,7 +49,6 @@ STAGES = {  # stage: (share of the work done when it starts, what the user sees)
     "surface": (0.80, "painting the burn onto the surface"),
     "metrics": (0.87, "measuring area, perimeter, relief and volume"),
 }
-GATEWAY_USER = "gateway"
 
 
 def run(config: Config, claim: Claim) -> JobState:
@@ -146,13 +145,9 @@ def _store(db: Database, queue: JobQueue, claim: Claim, row, inputs: JobInputs, 
         record = BurnAnalysis(encounter_id=row["encounter_id"], job_id=claim.job_id,
                               assets=[p.asset_id for p in inputs.pictures], requested_by=row["created_by"],
                               requested_at=row["created_at"], completed_at=now, result=result)  # fmt: skip
-        data = msgspec.json.encode(record)
-        store.insert_version(conn, kind=RecordKind.burn_analysis, record_id=claim.job_id, version=1,
-                             parent_id=row["encounter_id"], data_json=data, created_at=None,
-                             updated_by=GATEWAY_USER, device_id=None)  # fmt: skip
-        audit.append(conn, action="analysis.store", user_id=None, device_id=None, kind=RecordKind.burn_analysis.value,
-                     record_id=claim.job_id, after_version=1,
-                     content_hash=store.version_content_hash(data.decode(), False, None))  # fmt: skip
+        audit.insert_server_record(conn, kind=RecordKind.burn_analysis, record_id=claim.job_id,
+                                   parent_id=row["encounter_id"], data=msgspec.json.encode(record),
+                                   action="analysis.store")  # fmt: skip
     log.info("analysis %s stored: %s, area %s cm2", claim.job_id, result.status.value, result.metrics.area_cm2)
     return JobState.done
 

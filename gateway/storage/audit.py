@@ -14,11 +14,14 @@ import json
 import sqlite3
 from collections.abc import Iterator
 
-from gateway.storage.records import version_content_hash
+from gateway.storage.records import insert_version, version_content_hash
 from schemas.audit import AuditEntry, AuditVerification
 from schemas.base import iso, utcnow
+from schemas.records import RecordKind
 
 GENESIS_HASH = "0" * 64
+SERVER_USER = "gateway"
+"""`updated_by` of the records the gateway writes itself (analyses, consultations received)."""
 _HASHED_FIELDS = (
     "seq", "at", "user_id", "device_id", "action", "kind", "record_id",
     "before_version", "after_version", "detail", "content_hash", "prev_hash",
@@ -65,6 +68,24 @@ def append(
         list(fields.values()),
     )
     return AuditEntry(**fields)
+
+
+def insert_server_record(conn: sqlite3.Connection, *, kind: RecordKind, record_id: str, parent_id: str, data: bytes,
+                         action: str, detail: str = "") -> None:  # fmt: skip
+    """The first version of a record the gateway writes itself, with its audit entry; inside a write transaction."""
+    insert_version(conn, kind=kind, record_id=record_id, version=1, parent_id=parent_id, data_json=data,
+                   created_at=None, updated_by=SERVER_USER, device_id=None)  # fmt: skip
+    append(
+        conn,
+        action=action,
+        user_id=None,
+        device_id=None,
+        kind=kind.value,
+        record_id=record_id,
+        after_version=1,
+        detail=detail,
+        content_hash=version_content_hash(data.decode(), False, None),
+    )
 
 
 def entries(conn: sqlite3.Connection, after_seq: int = 0, limit: int | None = None) -> Iterator[AuditEntry]:
