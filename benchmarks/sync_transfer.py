@@ -38,8 +38,8 @@ from sync.outbox import Outbox
 from sync.sender import Sender
 from sync.service import keys_dir
 from sync.zenoh_link import _no_discovery_no_shm, _set
-from tests.conftest import FAST_HASH_ENV, encounter_body, free_port, patient_body
-from tests.sync_sites import Sites, noise_photo
+from tests.conftest import FAST_HASH_ENV, free_port
+from tests.sync_sites import Sites, record_case
 
 PHOTO_SIZE = (1500, 1120)  # ~1.3 MB of JPEG each
 PHOTO_MB = 1.3
@@ -52,13 +52,8 @@ def record_cases(sites: Sites, work: Path, count: int, mb: float) -> list[str]:
         client = sites.clinic_client()
         ids = []
         for n in range(count):
-            patient = client.post("/api/v1/patients", patient_body(), "patient")
-            encounter_id = client.post("/api/v1/encounters", encounter_body(patient["meta"]["id"]), "encounter")[
-                "meta"
-            ]["id"]
-            for i in range(max(1, math.ceil(mb / PHOTO_MB))):
-                client.upload(noise_photo(work / f"p{n}-{i}.jpg", 1000 * n + i, size=PHOTO_SIZE), encounter_id)
-            ids.append(encounter_id)
+            photos = max(1, math.ceil(mb / PHOTO_MB))
+            ids.append(record_case(client, work, photos, seed=10 * n, size=PHOTO_SIZE)[0])
         return ids
     finally:
         sites.gateway.stop()

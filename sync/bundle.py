@@ -10,6 +10,7 @@ from __future__ import annotations
 import hashlib
 import struct
 from dataclasses import dataclass
+from functools import cached_property
 from pathlib import PurePosixPath
 
 import msgspec
@@ -31,8 +32,9 @@ class PartData:
     name: str
     data: bytes
 
-    @property
+    @cached_property
     def described(self) -> BundlePart:
+        """Computed once: the outbox's change check and the manifest both need every part's sha256."""
         suffix = PurePosixPath(self.name).suffix.lower()
         return BundlePart(name=self.name, media_type=MEDIA_TYPES.get(suffix, "application/octet-stream"),
                           sha256=hashlib.sha256(self.data).hexdigest(), size=len(self.data))  # fmt: skip

@@ -4,6 +4,7 @@ summary for the consultant's case list, read in one snapshot of the gateway's da
 from __future__ import annotations
 
 import sqlite3
+from dataclasses import dataclass
 
 import msgspec
 
@@ -13,7 +14,7 @@ from gateway.storage.blobs import MediaStore, media_root
 from schemas.base import iso, utcnow
 from schemas.clinical_results import Assessment, ReferralTier
 from schemas.config import Config
-from schemas.records import ENCOUNTER_PARTS, EncounterRecord, RecordKind
+from schemas.records import ENCOUNTER_PARTS, EncounterRecord, Record, RecordKind
 from schemas.transfer import BundleManifest, CaseSummary, Urgency
 from sync.bundle import PartData
 
@@ -23,7 +24,15 @@ ANALYSIS_FILES = ("analysis.json", "metrics/metrics.json", "surface/burn_surface
 and the PDF report when there is one."""
 
 
-def snapshot(conn: sqlite3.Connection, config: Config, encounter_id: str) -> tuple[EncounterRecord, list[PartData]]:
+@dataclass(frozen=True)
+class Snapshot:
+    record: EncounterRecord
+    analyses: list[Record]
+    """The encounter's finished analyses (`burn_analysis` records)."""
+    parts: list[PartData]
+
+
+def snapshot(conn: sqlite3.Connection, config: Config, encounter_id: str) -> Snapshot:
     """The encounter's record and every part to send (record, patient, analyses with their files, photos)."""
     encounter = store.get_head(conn, RecordKind.encounter, encounter_id)
     record = EncounterRecord(encounter=encounter, parts=store.heads_of_children(conn, encounter_id, ENCOUNTER_PARTS))
@@ -32,43 +41,41 @@ def snapshot(conn: sqlite3.Connection, config: Config, encounter_id: str) -> tup
         PartData("record.json", msgspec.json.encode(record)),
         PartData("patient.json", msgspec.json.encode(patient)),
     ]
-    analyses = [r for r in store.list_heads(conn, RecordKind.burn_analysis, parent_id=encounter_id, limit=None)]
-    media = MediaStore(media_root(config))
+    analyses = store.list_heads(conn, RecordKind.burn_analysis, parent_id=encounter_id, limit=None)
     for analysis in analyses:
         job_id = analysis.meta.id
         parts.append(PartData(f"analyses/{job_id}/record.json", msgspec.json.encode(analysis)))
         folder = folders.analysis_dir(config, job_id)
-        for name in _analysis_files(config, job_id):
+        for name in folders.artifacts(config, job_id, ANALYSIS_FILES):
             parts.append(PartData(f"analyses/{job_id}/{name}", (folder / name).read_bytes()))
-    parts += _pictures(conn, media, encounter_id, config.sync.pictures)
-    return record, parts
+    parts += _pictures(conn, MediaStore(media_root(config)), encounter_id, config.sync.pictures)
+    return Snapshot(record=record, analyses=analyses, parts=parts)
 
 
-def summarize(record: EncounterRecord, parts: list[PartData]) -> CaseSummary:
+def summarize(snap: Snapshot) -> CaseSummary:
     """Urgency from the referral assessment computed at the clinic, and the headline figures."""
-    assessment_record = record.parts.get(RecordKind.assessment)
+    assessment_record = snap.record.parts.get(RecordKind.assessment)
     assessment = msgspec.convert(assessment_record.data, Assessment) if assessment_record else None
     urgency, reasons = _urgency(assessment)
-    analyses = [msgspec.json.decode(p.data) for p in parts if p.name.endswith("/record.json")
-                and p.name.startswith("analyses/")]  # fmt: skip
-    analyses.sort(key=lambda r: r["data"]["completed_at"])
-    scaled = [a for a in analyses if a["data"]["result"]["metrics"].get("area_cm2") is not None]
-    latest = scaled[-1]["data"]["result"] if scaled else None
+    results = [a.data["result"] for a in sorted(snap.analyses, key=lambda a: a.data["completed_at"])]
+    scaled = [r for r in results if r["metrics"].get("area_cm2") is not None]
+    latest = scaled[-1] if scaled else None
     return CaseSummary(
-        urgency=urgency, urgency_reasons=reasons, encounter_mode=record.encounter.data["mode"],
+        urgency=urgency, urgency_reasons=reasons, encounter_mode=snap.record.encounter.data["mode"],
         age_years=assessment.age_years if assessment else None,
         tbsa_percent=assessment.tbsa.tbsa_percent if assessment and assessment.tbsa else None,
-        analyses=len(analyses), area_cm2=latest["metrics"]["area_cm2"] if latest else None,
+        analyses=len(results), area_cm2=latest["metrics"]["area_cm2"] if latest else None,
         analysis_confidence=(latest.get("confidence") or {}).get("level") if latest else None,
     )  # fmt: skip
 
 
-def manifest_for(record: EncounterRecord, parts: list[PartData], *, bundle_id: str, site_id: str, version: int,
-                 supersedes: str | None, created_by: str) -> BundleManifest:  # fmt: skip
+def manifest_for(snap: Snapshot, *, bundle_id: str, site_id: str, version: int, supersedes: str | None,
+                 created_by: str) -> BundleManifest:  # fmt: skip
+    encounter = snap.record.encounter
     return BundleManifest(
-        bundle_id=bundle_id, site_id=site_id, patient_id=record.encounter.data["patient_id"],
-        encounter_id=record.encounter.meta.id, version=version, supersedes=supersedes, created_at=iso(utcnow()),
-        created_by=created_by, summary=summarize(record, parts), parts=[p.described for p in parts],
+        bundle_id=bundle_id, site_id=site_id, patient_id=encounter.data["patient_id"], encounter_id=encounter.meta.id,
+        version=version, supersedes=supersedes, created_at=iso(utcnow()), created_by=created_by,
+        summary=summarize(snap), parts=[p.described for p in snap.parts],
     )  # fmt: skip
 
 
@@ -84,14 +91,6 @@ def _urgency(assessment: Assessment | None) -> tuple[Urgency, list[str]]:
     if any(c.met is None for c in criteria):
         return Urgency.undetermined, [f"undetermined: {c.text}" for c in criteria if c.met is None]
     return Urgency.routine, []
-
-
-def _analysis_files(config: Config, job_id: str) -> list[str]:
-    folder = folders.analysis_dir(config, job_id)
-    found = []
-    for pattern in ANALYSIS_FILES:
-        found += sorted(str(p.relative_to(folder)) for p in folder.glob(pattern) if p.is_file())
-    return found
 
 
 def _pictures(conn: sqlite3.Connection, media: MediaStore, encounter_id: str, limit: int) -> list[PartData]:

@@ -50,18 +50,18 @@ class Outbox:
         with _queue_lock:  # one bundle version at a time per gateway: versions are counted, not raced
             with self.db.read() as conn:
                 center = peers.only_center(conn, self.config.sync.center_id)
-                record, parts = case_snapshot.snapshot(conn, self.config, encounter_id)
-                digest = _content_digest(parts)
+                snap = case_snapshot.snapshot(conn, self.config, encounter_id)
+                digest = _content_digest(snap.parts)
                 last = conn.execute("SELECT * FROM outbox WHERE center_id = ? AND encounter_id = ? ORDER BY version"
                                     " DESC LIMIT 1", (center.site_id, encounter_id)).fetchone()  # fmt: skip
             if last is not None and last["content_digest"] == digest:
                 return msgspec.structs.replace(_entry(last), unchanged=True)
             version = 1 if last is None else last["version"] + 1
             bundle_id = str(uuid.uuid4())
-            manifest = case_snapshot.manifest_for(record, parts, bundle_id=bundle_id, site_id=keys.site_id,
+            manifest = case_snapshot.manifest_for(snap, bundle_id=bundle_id, site_id=keys.site_id,
                                                   version=version, supersedes=last["bundle_id"] if last else None,
                                                   created_by=user)  # fmt: skip
-            sealed = seal(bundle.pack(manifest, parts), bytes.fromhex(center.box_key), bundle_id,
+            sealed = seal(bundle.pack(manifest, snap.parts), bytes.fromhex(center.box_key), bundle_id,
                           self.config.sync.chunk_kib * 1024)  # fmt: skip
             announcement = TransferManifest(
                 protocol=PROTOCOL, bundle_id=bundle_id, site_id=keys.site_id, center_id=center.site_id,

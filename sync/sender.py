@@ -88,9 +88,12 @@ class Sender:
             report.delivered.append(bundle_id)
             return
         manifest_refs = msgspec.msgpack.decode(self.outbox.envelope(row).body, type=TransferManifest).chunks
+        held = set(reply.held)
+        need = [i for i in range(len(manifest_refs)) if i not in held]
         for _ in range(3):  # a center that lost unsynced chunks in a crash says which are missing at commit
-            need = [i for i in range(len(manifest_refs)) if i not in set(reply.held)]
-            report.chunks_sent += self._send_chunks(session, link, row, manifest_refs, need, len(reply.held))
+            report.chunks_sent += self._send_chunks(
+                session, link, row, manifest_refs, need, len(manifest_refs) - len(need)
+            )
             commit = msgspec.msgpack.decode(
                 request(session, link.commit(self.keys.site_id, bundle_id), b"", timeout), type=CommitReply
             )
@@ -98,7 +101,7 @@ class Sender:
                 self._accept_receipt(center, row, commit.receipt)
                 report.delivered.append(bundle_id)
                 return
-            reply = AnnounceReply(status="send", held=[i for i in range(len(manifest_refs)) if i not in commit.missing])
+            need = commit.missing
         raise TransferRejected(f"the center still misses chunks of {bundle_id} after three sends", code="incomplete")
 
     def _send_chunks(self, session, link: Keys, row, refs: list[ChunkRef], need: list[int], held: int) -> int:

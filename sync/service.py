@@ -54,7 +54,7 @@ class SyncService:
             return None
         try:
             report = Sender(self.db, self.config, self.keys()).run_round()
-        except (LinkDown, BurnedgeError) as exc:
+        except BurnedgeError as exc:
             self._failed(exc.detail)
             log.warning("sync round failed: %s", exc.detail)
             if not isinstance(exc, LinkDown):
@@ -113,11 +113,10 @@ class SyncService:
 
     def _succeeded(self) -> None:
         now = iso(utcnow())
-        self._put(last_round_at=now, last_success_at=now, failures="0", next_round_at=now)
-        with self.db.write() as conn:
-            conn.execute("DELETE FROM sync_state WHERE key = 'last_error'")
+        self._put(last_round_at=now, last_success_at=now, failures="0", next_round_at=now, clear=("last_error",))
 
-    def _put(self, **values: str) -> None:
+    def _put(self, clear: tuple[str, ...] = (), **values: str) -> None:
         with self.db.write() as conn:
             conn.executemany("INSERT INTO sync_state (key, value) VALUES (?, ?) ON CONFLICT (key) DO UPDATE SET"
                              " value = excluded.value", list(values.items()))  # fmt: skip
+            conn.executemany("DELETE FROM sync_state WHERE key = ?", [(k,) for k in clear])

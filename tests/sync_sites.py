@@ -14,7 +14,17 @@ import cv2
 import numpy as np
 
 from gateway.demo_client import GatewayClient
-from tests.conftest import FAST_HASH_ENV, PASSWORD, REPO, GatewayProcess, add_user_cli, free_port, wait_healthy
+from tests.conftest import (
+    FAST_HASH_ENV,
+    PASSWORD,
+    REPO,
+    GatewayProcess,
+    add_user_cli,
+    encounter_body,
+    free_port,
+    patient_body,
+    wait_healthy,
+)
 
 CLINIC = "clinic-test"
 CENTER = "center-test"
@@ -38,6 +48,17 @@ def noise_photo(path: Path, seed: int, size: tuple[int, int] = (1600, 1200), qua
     return path
 
 
+def record_case(client: GatewayClient, folder: Path, photos: int, seed: int = 0,
+                size: tuple[int, int] = (1600, 1200)) -> tuple[str, list[Path]]:  # fmt: skip
+    """A patient, an encounter and `photos` noise photos uploaded over tus, through the clinic's HTTP API."""
+    patient = client.post("/api/v1/patients", patient_body(), "patient")
+    encounter_id = client.post("/api/v1/encounters", encounter_body(patient["meta"]["id"]), "encounter")["meta"]["id"]
+    paths = [noise_photo(folder / f"photo-{seed}-{i}.jpg", seed * 100 + i, size=size) for i in range(photos)]
+    for path in paths:
+        client.upload(path, encounter_id)
+    return encounter_id, paths
+
+
 class CenterProcess:
     def __init__(self, folder: Path, zenoh_port: int, http_port: int):
         self.folder = folder
@@ -48,9 +69,9 @@ class CenterProcess:
         self.log = folder / "center.log"
         self.proc: subprocess.Popen | None = None
 
-    def start(self, timeout: float = 30.0, prefix: list[str] | None = None) -> CenterProcess:
+    def start(self, timeout: float = 30.0) -> CenterProcess:
         with open(self.log, "ab") as log:
-            self.proc = subprocess.Popen([*(prefix or []), sys.executable, "-m", "gateway.cli", "central", "--site-id",
+            self.proc = subprocess.Popen([sys.executable, "-m", "gateway.cli", "central", "--site-id",
                                           CENTER, "--name", "Test burn center"], cwd=REPO, stdout=log,
                                          stderr=subprocess.STDOUT, env={**os.environ, **FAST_HASH_ENV, **self.env})  # fmt: skip
         wait_healthy(self.proc, self.url, self.log, timeout, "center")

@@ -7,8 +7,8 @@ from pathlib import Path
 
 import pytest
 
-from tests.conftest import encounter_body, free_port, patient_body
-from tests.sync_sites import Sites, noise_photo, wait_for
+from tests.conftest import free_port
+from tests.sync_sites import Sites, noise_photo, record_case, wait_for
 
 pytestmark = pytest.mark.server
 
@@ -19,16 +19,6 @@ def sites(tmp_path: Path):
     sites.set_up()
     yield sites
     sites.stop()
-
-
-def record_case(client, tmp_path: Path, photos: int, seed: int = 0) -> tuple[str, list[Path]]:
-    patient = client.post("/api/v1/patients", patient_body(), "patient")
-    encounter = client.post("/api/v1/encounters", encounter_body(patient["meta"]["id"]), "encounter")
-    encounter_id = encounter["meta"]["id"]
-    paths = [noise_photo(tmp_path / f"photo-{seed}-{i}.jpg", seed * 100 + i) for i in range(photos)]
-    for path in paths:
-        client.upload(path, encounter_id)
-    return encounter_id, paths
 
 
 def delivered(client, encounter_id: str, version: int):

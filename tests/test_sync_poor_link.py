@@ -18,9 +18,9 @@ from pathlib import Path
 
 import pytest
 
-from tests.conftest import FAST_HASH_ENV, REPO, encounter_body, free_port, patient_body
+from tests.conftest import FAST_HASH_ENV, REPO, free_port
 from tests.poor_link import NetnsLink, ThrottlingProxy
-from tests.sync_sites import CENTER, Sites, cli, noise_photo
+from tests.sync_sites import CENTER, Sites, cli, record_case
 
 pytestmark = pytest.mark.server
 
@@ -50,13 +50,7 @@ def record_and_queue(sites: Sites, tmp_path: Path, photos: int = 4) -> tuple[str
     """Record a case with photos through the clinic's HTTP API on loopback, stop it, queue it with the CLI."""
     sites.gateway.start()
     try:
-        client = sites.clinic_client()
-        patient = client.post("/api/v1/patients", patient_body(), "patient")
-        encounter = client.post("/api/v1/encounters", encounter_body(patient["meta"]["id"]), "encounter")
-        encounter_id = encounter["meta"]["id"]
-        paths = [noise_photo(tmp_path / f"photo-{i}.jpg", 700 + i, size=PHOTO_SIZE) for i in range(photos)]
-        for path in paths:
-            client.upload(path, encounter_id)
+        encounter_id, paths = record_case(sites.clinic_client(), tmp_path, photos, seed=7, size=PHOTO_SIZE)
     finally:
         sites.gateway.stop()
     cli("--db", str(sites.gateway.db), "sync", "send", encounter_id, "--by", "clin", env=sites.gateway.env)

@@ -57,10 +57,10 @@ def patient_dir(config: Config, patient_id: str) -> Path:
     return work_root(config) / "patients" / patient_id
 
 
-def artifacts(config: Config, job_id: str) -> list[str]:
-    """The downloadable files of a job, relative to its analysis folder."""
+def artifacts(config: Config, job_id: str, patterns: tuple[str, ...] = DELIVERABLES) -> list[str]:
+    """The downloadable files of a job (or those matching `patterns`), relative to its analysis folder."""
     folder = analysis_dir(config, job_id)
-    found = {str(p.relative_to(folder)) for pattern in DELIVERABLES for p in folder.glob(pattern) if p.is_file()}
+    found = {str(p.relative_to(folder)) for pattern in patterns for p in folder.glob(pattern) if p.is_file()}
     return sorted(found)
 
 

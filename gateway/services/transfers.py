@@ -33,8 +33,7 @@ class TransferService:
         return self.sync.outbox.entries(encounter_id)
 
     def all_transfers(self, who: Principal) -> list[OutboxEntry]:
-        if who.role not in (Role.admin, Role.clinician, Role.nurse):
-            raise Forbidden("only clinic staff see the outbox")
+        _require_staff(who, "the outbox")
         return self.sync.outbox.entries()
 
     def consultations(self, who: Principal, encounter_id: str) -> list[Record]:
@@ -44,6 +43,10 @@ class TransferService:
         return store.list_heads(conn, RecordKind.consultation, parent_id=encounter_id, limit=None)
 
     def status(self, who: Principal) -> SyncStatus:
-        if who.role not in (Role.admin, Role.clinician, Role.nurse):
-            raise Forbidden("only clinic staff see the link to the burn center")
+        _require_staff(who, "the link to the burn center")
         return self.sync.status()
+
+
+def _require_staff(who: Principal, what: str) -> None:
+    if who.role not in (Role.admin, Role.clinician, Role.nurse):
+        raise Forbidden(f"only clinic staff see {what}")

@@ -115,20 +115,23 @@ class Receiver:
                 return CommitReply(status="stored", receipt=stored)
             manifest = self._incoming(site_id, bundle_id)
             folder = self.staging / site_id / bundle_id
-            missing = [i for i, ref in enumerate(manifest.chunks) if not _chunk_ok(folder / f"{i:06d}.chunk", ref)]
+            # Read once: checked against the manifest here (an unsynced chunk may have been lost or damaged in a
+            # crash), then decrypted from the same bytes.
+            chunks = [_staged(folder / f"{i:06d}.chunk") for i in range(len(manifest.chunks))]
+            missing = [i for i, (data, ref) in enumerate(zip(chunks, manifest.chunks, strict=True))
+                       if hashlib.sha256(data).hexdigest() != ref.sha256]  # fmt: skip
             if missing:
                 return CommitReply(status="missing", missing=missing)
             try:
-                receipt = self._store(site_id, manifest, folder)
+                receipt = self._store(site_id, manifest, folder, chunks)
             except TransferRejected:
                 self._drop_incoming(site_id, bundle_id)  # the bundle itself is bad: nothing of it is kept
                 raise
             return CommitReply(status="stored", receipt=receipt)
 
-    def _store(self, site_id: str, transfer: TransferManifest, folder: Path) -> SignedEnvelope:
+    def _store(self, site_id: str, transfer: TransferManifest, folder: Path, chunks: list[bytes]) -> SignedEnvelope:
         key = unseal_key(transfer.sealed_key, self.keys.box)
-        files = (folder / f"{i:06d}.chunk" for i in range(len(transfer.chunks)))
-        plain = b"".join(open_chunks(key, transfer.bundle_id, (p.read_bytes() for p in files), len(transfer.chunks)))
+        plain = b"".join(open_chunks(key, transfer.bundle_id, chunks, len(chunks)))
         manifest, parts = bundle.unpack(plain)
         if (manifest.bundle_id, manifest.site_id, manifest.encounter_id, manifest.version) != (
             transfer.bundle_id, site_id, transfer.encounter_id, transfer.version):  # fmt: skip
@@ -286,8 +289,9 @@ def _size_ok(path: Path, size: int) -> bool:
         return False
 
 
-def _chunk_ok(path: Path, ref) -> bool:
+def _staged(path: Path) -> bytes:
+    """A staged chunk's bytes; empty when it is not there (no chunk is empty: each carries its nonce and tag)."""
     try:
-        return hashlib.sha256(path.read_bytes()).hexdigest() == ref.sha256
+        return path.read_bytes()
     except FileNotFoundError:
-        return False
+        return b""
