@@ -108,8 +108,9 @@ class QualityGateConfig(Message):
     """Smallest long side in pixels (landscape or portrait)."""
     min_height: Annotated[int, msgspec.Meta(ge=1)] = 600
     """Smallest short side in pixels."""
-    max_pixels: Annotated[int, msgspec.Meta(ge=1)] = 250_000_000
-    """Larger images are refused before decoding (decompression bombs; the largest phone sensors make 200 MP)."""
+    max_pixels: Annotated[int, msgspec.Meta(ge=1)] = 52_000_000
+    """Larger images are refused from their header, before any decoding (decompression bombs). 52 MP covers the
+    12, 48 and 50 MP modes phones shoot by default (8160 x 6120 is 49.9 MP); a 200 MP mode is refused with advice."""
     analysis_long_side: Annotated[int, msgspec.Meta(ge=256)] = 1000
     """Images are analysed at this long side so thresholds do not depend on resolution."""
     min_local_sharpness: Annotated[float, msgspec.Meta(ge=0)] = 200.0

@@ -67,6 +67,34 @@ def png_bomb(side: int = 40_000) -> bytes:
     return b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", ihdr) + chunk(b"IDAT", data) + chunk(b"IEND", b"")
 
 
+def png_header_bomb(side: int = 100_000) -> bytes:
+    """A few hundred bytes whose header declares side x side RGB pixels, with an EXIF chunk after the pixel data
+    (where Pillow's getexif() would decode the whole image to find it)."""
+
+    def chunk(kind: bytes, body: bytes) -> bytes:
+        return struct.pack(">I", len(body)) + kind + body + struct.pack(">I", zlib.crc32(kind + body))
+
+    exif = Image.Exif()
+    exif[0x0112] = 6
+    ihdr = struct.pack(">IIBBBBB", side, side, 8, 2, 0, 0, 0)
+    idat = zlib.compress(b"\x00" * 256, 9)
+    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", ihdr) + chunk(b"IDAT", idat) + chunk(b"eXIf", exif.tobytes())
+            + chunk(b"IEND", b""))  # fmt: skip
+
+
+def rgb_png(width: int, height: int) -> bytes:
+    """A valid, highly compressible RGB PNG: a few hundred kB that decode to width x height x 3 bytes."""
+    row = b"\x00" + b"\x80\x60\x40" * width
+    comp = zlib.compressobj(1)
+    data = b"".join(comp.compress(row) for _ in range(height)) + comp.flush()
+
+    def chunk(kind: bytes, body: bytes) -> bytes:
+        return struct.pack(">I", len(body)) + kind + body + struct.pack(">I", zlib.crc32(kind + body))
+
+    ihdr = struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0)
+    return b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", ihdr) + chunk(b"IDAT", data) + chunk(b"IEND", b"")
+
+
 def video(path, codec: str = "libx264", seconds: float = 2.0, size: tuple[int, int] = (960, 720), fps: int = 30,
           *, still: bool = False, blur_except_every: int = 0, pix_fmt: str = "yuv420p", rotation: int = 0,
           crf: int | None = None) -> bytes:  # fmt: skip

@@ -125,7 +125,7 @@ def test_heic_photos_and_hevc_and_h264_videos_are_accepted(client, auth, enc, tm
         (lambda tmp: jpeg(scene())[:-20000], 422, "truncated"),
         (lambda tmp: heic(scene())[:-100], 422, "truncated"),
         (lambda tmp: video(tmp / "v.mp4")[:-4000], 422, "truncated"),
-        (lambda tmp: png_bomb(), 422, "larger than any phone photo"),
+        (lambda tmp: png_bomb(), 422, "refused without decoding"),
     ],
     ids=["not-an-image-named-jpg", "truncated-jpeg", "truncated-heic", "truncated-mp4", "decompression-bomb"],
 )
