@@ -83,6 +83,20 @@ def http_error(request: Request, exc: HTTPException) -> Response:
     return _respond(problem, exc.headers)
 
 
+def too_deep(request: Request, exc: RecursionError) -> Response:
+    """JSON nested beyond what the decoder will follow (no schema nests deeper than a few levels): a bad body, not
+    a fault, so one warning line and no traceback. Other recursion errors are the gateway's own."""
+    if "deserializing" not in str(exc):
+        return unexpected_error(request, exc)
+    log.warning("refused a JSON body nested too deeply on %s %s", request.method, request.url.path)
+    problem = Problem(
+        type=_TYPE_BASE + "validation", title="Request not valid", status=400,
+        detail="nothing was stored: the JSON body is nested too deeply (no burnedge message nests more than a few "
+        "levels)", instance=request.url.path,
+    )  # fmt: skip
+    return _respond(problem)
+
+
 def unexpected_error(request: Request, exc: Exception) -> Response:
     log.exception("unhandled error on %s %s", request.method, request.url.path)
     problem = Problem(
@@ -104,5 +118,6 @@ EXCEPTION_HANDLERS = {
     BurnedgeError: burnedge_error,
     ValidationException: validation_error,
     HTTPException: http_error,
+    RecursionError: too_deep,
     Exception: unexpected_error,
 }

@@ -9,7 +9,7 @@ import msgspec
 
 from schemas.base import Frozen, Message, ShortText, Timestamp
 
-Username = Annotated[str, msgspec.Meta(pattern=r"^[a-z0-9][a-z0-9._-]{1,63}$")]
+Username = Annotated[str, msgspec.Meta(pattern=r"\A[a-z0-9][a-z0-9._-]{1,63}\Z")]
 Password = Annotated[str, msgspec.Meta(min_length=10, max_length=256)]
 
 

@@ -7,17 +7,15 @@ from typing import Annotated
 
 import msgspec
 
-# Client-generated identifiers: a UUID in canonical text form (UUIDv7 preferred, any
-# version accepted so existing phone libraries work) or a ULID.
-ID_PATTERN = (
-    r"^([0-9a-f]{8}-[0-9a-f]{4}-[0-9a-f]{4}-[0-9a-f]{4}-[0-9a-f]{12}"
-    r"|[0-9A-HJKMNP-TV-Z]{26})$"
-)
+# Identifiers: a UUID in canonical text form, lower case, nothing around it (UUIDv7 preferred, any version
+# accepted so existing phone libraries work). msgspec searches patterns, so the pattern is anchored at both
+# ends with \A and \Z: `$` would also match before a final newline, making "<uuid>\n" a second, different id.
+ID_PATTERN = r"\A[0-9a-f]{8}-[0-9a-f]{4}-[0-9a-f]{4}-[0-9a-f]{4}-[0-9a-f]{12}\Z"
 Id = Annotated[
     str,
     msgspec.Meta(
         pattern=ID_PATTERN,
-        description="Client-generated identifier: UUID (v7 preferred, lower-case) or ULID.",
+        description="Identifier: a UUID in canonical lower-case form (v7 preferred), nothing before or after it.",
         examples=["0192f3b4-6a8e-7c3d-9b1a-2f4e5d6c7b8a"],
     ),
 ]

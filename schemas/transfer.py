@@ -14,9 +14,10 @@ import msgspec
 
 from schemas.base import Frozen, Id, LongText, ShortText
 
-SiteId = Annotated[str, msgspec.Meta(pattern=r"^[a-z0-9][a-z0-9-]{1,62}$", description="A site's name on the wire: "
+SITE_ID_PATTERN = r"\A[a-z0-9][a-z0-9-]{1,62}\Z"
+SiteId = Annotated[str, msgspec.Meta(pattern=SITE_ID_PATTERN, description="A site's name on the wire: "
                                      "lower-case letters, digits and dashes, e.g. 'clinic-kasese'.")]  # fmt: skip
-Sha256 = Annotated[str, msgspec.Meta(pattern=r"^[0-9a-f]{64}$")]
+Sha256 = Annotated[str, msgspec.Meta(pattern=r"\A[0-9a-f]{64}\Z")]
 PROTOCOL = 1
 """Version of the wire messages below; a receiver rejects others with the reason."""
 

@@ -3,9 +3,9 @@
 from __future__ import annotations
 
 from litestar import Controller, get
-from litestar.params import FromPath
 from litestar.response import File
 
+from gateway.controllers.common import IdPath
 from gateway.dependencies import AuthedRequest, ServicesDep
 from schemas.capture import Asset, CaptureReadiness
 
@@ -15,11 +15,11 @@ class AssetController(Controller):
     tags = ["assets"]
 
     @get("/assets/{asset_id:str}", sync_to_thread=False, summary="A stored photo, video or frame, with its verdict")
-    def read(self, asset_id: FromPath[str], request: AuthedRequest, services: ServicesDep) -> Asset:
+    def read(self, asset_id: IdPath, request: AuthedRequest, services: ServicesDep) -> Asset:
         return services.assets.get(request.user, asset_id)
 
     @get("/assets/{asset_id:str}/file", sync_to_thread=True, summary="The original bytes, exactly as uploaded")
-    def download(self, asset_id: FromPath[str], request: AuthedRequest, services: ServicesDep) -> File:
+    def download(self, asset_id: IdPath, request: AuthedRequest, services: ServicesDep) -> File:
         asset, path = services.assets.file(request.user, asset_id)
         return File(path=path, filename=asset.filename, media_type=asset.media_type.value,
                     headers={"ETag": f'"{asset.sha256}"'})  # fmt: skip
@@ -29,10 +29,10 @@ class AssetController(Controller):
         sync_to_thread=False,
         summary="An encounter's photos, videos and frames",
     )
-    def for_encounter(self, encounter_id: FromPath[str], request: AuthedRequest, services: ServicesDep) -> list[Asset]:
+    def for_encounter(self, encounter_id: IdPath, request: AuthedRequest, services: ServicesDep) -> list[Asset]:
         return services.assets.for_encounter(request.user, encounter_id)
 
     @get("/encounters/{encounter_id:str}/capture-readiness", sync_to_thread=True,
          summary="Is the capture set ready for 3D analysis, and what is missing")  # fmt: skip
-    def readiness(self, encounter_id: FromPath[str], request: AuthedRequest, services: ServicesDep) -> CaptureReadiness:
+    def readiness(self, encounter_id: IdPath, request: AuthedRequest, services: ServicesDep) -> CaptureReadiness:
         return services.assets.readiness(request.user, encounter_id)

@@ -5,8 +5,9 @@ from __future__ import annotations
 from typing import Annotated
 
 from litestar import Controller, Request, get, post
-from litestar.params import FromPath, HeaderParameter, JSONBody, QueryParameter
+from litestar.params import HeaderParameter, JSONBody, QueryParameter
 
+from gateway.controllers.common import IdPath
 from gateway.dependencies import AuthedRequest, ServicesDep, client_address
 from gateway.services import audit_trail
 from schemas.accounts import (
@@ -63,11 +64,11 @@ class AdminController(Controller):
 
     @post("/users/{user_id:str}/disable", sync_to_thread=True, status_code=200,
           summary="Disable an account: its sessions end at once")  # fmt: skip
-    def disable_user(self, user_id: FromPath[str], request: AuthedRequest, services: ServicesDep) -> User:
+    def disable_user(self, user_id: IdPath, request: AuthedRequest, services: ServicesDep) -> User:
         return services.accounts.set_active(request.user, user_id, False)
 
     @post("/users/{user_id:str}/enable", sync_to_thread=True, status_code=200, summary="Re-enable an account")
-    def enable_user(self, user_id: FromPath[str], request: AuthedRequest, services: ServicesDep) -> User:
+    def enable_user(self, user_id: IdPath, request: AuthedRequest, services: ServicesDep) -> User:
         return services.accounts.set_active(request.user, user_id, True)
 
     @get("/users", sync_to_thread=False, summary="List user accounts")
@@ -86,7 +87,7 @@ class AdminController(Controller):
 
     @post("/devices/{device_id:str}/revoke", sync_to_thread=True, status_code=200,
           summary="Revoke a phone: its token and sessions stop working at once")  # fmt: skip
-    def revoke(self, device_id: FromPath[str], request: AuthedRequest, services: ServicesDep) -> Device:
+    def revoke(self, device_id: IdPath, request: AuthedRequest, services: ServicesDep) -> Device:
         return services.accounts.revoke_device(request.user, device_id)
 
     @get("/audit", sync_to_thread=False, summary="Audit entries after a sequence number")

@@ -1,14 +1,22 @@
-"""Helpers shared by the record controllers: ETags, preconditions, record responses."""
+"""Helpers shared by the controllers: identifiers in paths, ETags, preconditions, record responses."""
 
 from __future__ import annotations
 
 import re
+from typing import Annotated
 
 from litestar import Response
+from litestar.params import PathParameter
 
 from gateway.services.records import WriteOutcome
+from schemas.base import ID_PATTERN
 from schemas.errors import InvalidInput, PreconditionRequired
 from schemas.records import Record
+from schemas.transfer import SITE_ID_PATTERN
+
+IdPath = Annotated[str, PathParameter(pattern=ID_PATTERN, description="A UUID in canonical lower-case form.")]
+"""An identifier in a path, matched whole: a malformed one is a 400, never a lookup of a different id."""
+SiteIdPath = Annotated[str, PathParameter(pattern=SITE_ID_PATTERN, description="A site's name on the wire.")]
 
 _ETAG = re.compile(r'^\s*(?:W/)?"?(\d+)"?\s*$')
 

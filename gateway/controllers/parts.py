@@ -8,9 +8,9 @@ body type is a variable, and Litestar must see the real class.
 from typing import Annotated
 
 from litestar import Controller, Response, delete, get, post, put
-from litestar.params import FromPath, HeaderParameter, JSONBody
+from litestar.params import HeaderParameter, JSONBody
 
-from gateway.controllers.common import outcome_response, parse_version, record_response
+from gateway.controllers.common import IdPath, outcome_response, parse_version, record_response
 from gateway.controllers.records import IfMatch, Reason
 from gateway.dependencies import AuthedRequest, ServicesDep
 from schemas.burn_chart import BurnChart
@@ -34,11 +34,11 @@ WRITABLE_PARTS = {
 
 def _readers(kind: RecordKind, label: str):
     @get("/", sync_to_thread=False, summary=f"Read the {label}")
-    def read(self, encounter_id: FromPath[str], request: AuthedRequest, services: ServicesDep) -> Response[Record]:
+    def read(self, encounter_id: IdPath, request: AuthedRequest, services: ServicesDep) -> Response[Record]:
         return record_response(services.records.get(request.user, kind, encounter_id))
 
     @get("/history", sync_to_thread=False, summary=f"Every version of the {label}")
-    def history(self, encounter_id: FromPath[str], request: AuthedRequest, services: ServicesDep) -> RecordHistory:
+    def history(self, encounter_id: IdPath, request: AuthedRequest, services: ServicesDep) -> RecordHistory:
         return RecordHistory(
             kind=kind, id=encounter_id, versions=services.records.history(request.user, kind, encounter_id)
         )
@@ -51,7 +51,7 @@ def writable_part_controller(slug: str, kind: RecordKind, struct: type) -> type[
     read, history = _readers(kind, label)
 
     @put("/", sync_to_thread=True, summary=f"Create (If-None-Match: *) or update (If-Match) the {label}")
-    def write(self, encounter_id: FromPath[str], data: JSONBody[struct], request: AuthedRequest, services: ServicesDep,
+    def write(self, encounter_id: IdPath, data: JSONBody[struct], request: AuthedRequest, services: ServicesDep,
               if_match: IfMatch = None, if_none_match: IfNoneMatch = None) -> Response[Record]:  # fmt: skip
         if if_match is None and if_none_match is not None:
             if if_none_match.strip() != "*":
@@ -65,7 +65,7 @@ def writable_part_controller(slug: str, kind: RecordKind, struct: type) -> type[
         return outcome_response(services.records.update(request.user, kind, encounter_id, data, version))
 
     @delete("/", sync_to_thread=True, status_code=200, summary=f"Withdraw the {label}")
-    def withdraw(self, encounter_id: FromPath[str], request: AuthedRequest, services: ServicesDep, reason: Reason,
+    def withdraw(self, encounter_id: IdPath, request: AuthedRequest, services: ServicesDep, reason: Reason,
                  if_match: IfMatch = None) -> Response[Record]:  # fmt: skip
         version = parse_version(if_match, action=f"withdrawing the {label}")
         return outcome_response(services.records.delete(request.user, kind, encounter_id, version, reason))
@@ -80,7 +80,7 @@ def assessment_controller() -> type[Controller]:
 
     @post("/", sync_to_thread=True, status_code=200,
           summary="Recompute %TBSA, fluids and referral as of now (e.g. after more fluid was given)")  # fmt: skip
-    def recompute(self, encounter_id: FromPath[str], request: AuthedRequest, services: ServicesDep) -> Response[Record]:
+    def recompute(self, encounter_id: IdPath, request: AuthedRequest, services: ServicesDep) -> Response[Record]:
         return record_response(services.records.recompute_assessment(request.user, encounter_id))
 
     attrs = {"path": "/api/v1/encounters/{encounter_id:str}/assessment", "tags": ["encounter record"],

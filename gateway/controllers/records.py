@@ -5,9 +5,9 @@ from __future__ import annotations
 from typing import Annotated
 
 from litestar import Controller, Response, delete, get, post, put
-from litestar.params import FromPath, FromQuery, HeaderParameter, JSONBody, QueryParameter
+from litestar.params import FromQuery, HeaderParameter, JSONBody, QueryParameter
 
-from gateway.controllers.common import outcome_response, parse_version, record_response
+from gateway.controllers.common import IdPath, outcome_response, parse_version, record_response
 from gateway.dependencies import AuthedRequest, ServicesDep
 from schemas.patient import Encounter, Patient
 from schemas.records import EncounterRecord, Record, RecordHistory, RecordKind
@@ -36,28 +36,28 @@ class PatientController(Controller):
                                      limit=limit, offset=offset)  # fmt: skip
 
     @get("/{patient_id:str}", sync_to_thread=False, summary="Read a patient")
-    def read(self, patient_id: FromPath[str], request: AuthedRequest, services: ServicesDep) -> Response[Record]:
+    def read(self, patient_id: IdPath, request: AuthedRequest, services: ServicesDep) -> Response[Record]:
         return record_response(services.records.get(request.user, RecordKind.patient, patient_id))
 
     @put("/{patient_id:str}", sync_to_thread=True, summary="Update a patient (If-Match required)")
-    def update(self, patient_id: FromPath[str], data: JSONBody[Patient], request: AuthedRequest, services: ServicesDep,
+    def update(self, patient_id: IdPath, data: JSONBody[Patient], request: AuthedRequest, services: ServicesDep,
                if_match: IfMatch = None) -> Response[Record]:  # fmt: skip
         version = parse_version(if_match, action="updating a patient")
         return outcome_response(services.records.update(request.user, RecordKind.patient, patient_id, data, version))
 
     @delete("/{patient_id:str}", sync_to_thread=True, status_code=200, summary="Withdraw a patient (kept in history)")
-    def withdraw(self, patient_id: FromPath[str], request: AuthedRequest, services: ServicesDep, reason: Reason,
+    def withdraw(self, patient_id: IdPath, request: AuthedRequest, services: ServicesDep, reason: Reason,
                  if_match: IfMatch = None) -> Response[Record]:  # fmt: skip
         version = parse_version(if_match, action="withdrawing a patient")
         return outcome_response(services.records.delete(request.user, RecordKind.patient, patient_id, version, reason))
 
     @get("/{patient_id:str}/history", sync_to_thread=False, summary="Every version of a patient")
-    def history(self, patient_id: FromPath[str], request: AuthedRequest, services: ServicesDep) -> RecordHistory:
+    def history(self, patient_id: IdPath, request: AuthedRequest, services: ServicesDep) -> RecordHistory:
         versions = services.records.history(request.user, RecordKind.patient, patient_id)
         return RecordHistory(kind=RecordKind.patient, id=patient_id, versions=versions)
 
     @get("/{patient_id:str}/encounters", sync_to_thread=False, summary="A patient's encounters")
-    def encounters(self, patient_id: FromPath[str], request: AuthedRequest, services: ServicesDep,
+    def encounters(self, patient_id: IdPath, request: AuthedRequest, services: ServicesDep,
                    include_deleted: FromQuery[bool] = False) -> list[Record]:  # fmt: skip
         services.records.get(request.user, RecordKind.patient, patient_id)
         return services.records.list_records(request.user, RecordKind.encounter, parent_id=patient_id,
@@ -73,11 +73,11 @@ class EncounterController(Controller):
         return outcome_response(services.records.create(request.user, RecordKind.encounter, data.id, data))
 
     @get("/{encounter_id:str}", sync_to_thread=False, summary="Read an encounter")
-    def read(self, encounter_id: FromPath[str], request: AuthedRequest, services: ServicesDep) -> Response[Record]:
+    def read(self, encounter_id: IdPath, request: AuthedRequest, services: ServicesDep) -> Response[Record]:
         return record_response(services.records.get(request.user, RecordKind.encounter, encounter_id))
 
     @put("/{encounter_id:str}", sync_to_thread=True, summary="Update an encounter (If-Match required)")
-    def update(self, encounter_id: FromPath[str], data: JSONBody[Encounter], request: AuthedRequest, services: ServicesDep,
+    def update(self, encounter_id: IdPath, data: JSONBody[Encounter], request: AuthedRequest, services: ServicesDep,
                if_match: IfMatch = None) -> Response[Record]:  # fmt: skip
         version = parse_version(if_match, action="updating an encounter")
         return outcome_response(
@@ -85,7 +85,7 @@ class EncounterController(Controller):
         )
 
     @delete("/{encounter_id:str}", sync_to_thread=True, status_code=200, summary="Withdraw an encounter")
-    def withdraw(self, encounter_id: FromPath[str], request: AuthedRequest, services: ServicesDep, reason: Reason,
+    def withdraw(self, encounter_id: IdPath, request: AuthedRequest, services: ServicesDep, reason: Reason,
                  if_match: IfMatch = None) -> Response[Record]:  # fmt: skip
         version = parse_version(if_match, action="withdrawing an encounter")
         return outcome_response(
@@ -93,12 +93,10 @@ class EncounterController(Controller):
         )
 
     @get("/{encounter_id:str}/history", sync_to_thread=False, summary="Every version of an encounter")
-    def history(self, encounter_id: FromPath[str], request: AuthedRequest, services: ServicesDep) -> RecordHistory:
+    def history(self, encounter_id: IdPath, request: AuthedRequest, services: ServicesDep) -> RecordHistory:
         versions = services.records.history(request.user, RecordKind.encounter, encounter_id)
         return RecordHistory(kind=RecordKind.encounter, id=encounter_id, versions=versions)
 
     @get("/{encounter_id:str}/record", sync_to_thread=False, summary="The encounter with every part and its assessment")
-    def full_record(
-        self, encounter_id: FromPath[str], request: AuthedRequest, services: ServicesDep
-    ) -> EncounterRecord:
+    def full_record(self, encounter_id: IdPath, request: AuthedRequest, services: ServicesDep) -> EncounterRecord:
         return services.records.encounter_record(request.user, encounter_id)

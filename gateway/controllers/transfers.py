@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 from litestar import Controller, Response, get, post
-from litestar.params import FromPath
 
+from gateway.controllers.common import IdPath
 from gateway.dependencies import AuthedRequest, ServicesDep
 from schemas.records import Record
 from schemas.transfer import OutboxEntry, SyncStatus
@@ -16,7 +16,7 @@ class TransferController(Controller):
 
     @post("/encounters/{encounter_id:str}/transfers", sync_to_thread=True,
           summary="Send the encounter as it stands now to the burn center (encrypted; delivered when a link exists)")  # fmt: skip
-    def send(self, encounter_id: FromPath[str], request: AuthedRequest, services: ServicesDep) -> Response[OutboxEntry]:
+    def send(self, encounter_id: IdPath, request: AuthedRequest, services: ServicesDep) -> Response[OutboxEntry]:
         entry = services.transfers.send(request.user, encounter_id)
         if not entry.unchanged:
             services.run_sync_now()
@@ -24,14 +24,12 @@ class TransferController(Controller):
 
     @get("/encounters/{encounter_id:str}/transfers", sync_to_thread=False,
          summary="Versions of this encounter sent to the burn center, and whether each was delivered")  # fmt: skip
-    def transfers(
-        self, encounter_id: FromPath[str], request: AuthedRequest, services: ServicesDep
-    ) -> list[OutboxEntry]:
+    def transfers(self, encounter_id: IdPath, request: AuthedRequest, services: ServicesDep) -> list[OutboxEntry]:
         return services.transfers.transfers(request.user, encounter_id)
 
     @get("/encounters/{encounter_id:str}/consultations", sync_to_thread=False,
          summary="The burn center consultants' notes on this encounter (decision support)")  # fmt: skip
-    def consultations(self, encounter_id: FromPath[str], request: AuthedRequest, services: ServicesDep) -> list[Record]:
+    def consultations(self, encounter_id: IdPath, request: AuthedRequest, services: ServicesDep) -> list[Record]:
         return services.transfers.consultations(request.user, encounter_id)
 
     @get("/transfers", sync_to_thread=False, summary="The outbox: every case sent or waiting, newest first")

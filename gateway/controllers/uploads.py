@@ -21,8 +21,9 @@ import anyio
 from litestar import Controller, Request, Response, delete, get, head, post, route
 from litestar.enums import HttpMethod
 from litestar.exceptions import InternalServerException
-from litestar.params import FromPath, HeaderParameter
+from litestar.params import HeaderParameter
 
+from gateway.controllers.common import IdPath
 from gateway.dependencies import AuthedRequest, ServicesDep
 from gateway.scheduler import run_frames_now
 from gateway.services.uploads import UploadState
@@ -107,7 +108,7 @@ class UploadController(Controller):
         return Response(None, status_code=201, headers={**_headers(state), "Location": location})
 
     @head("/{upload_id:str}", sync_to_thread=True, summary="How many bytes the gateway holds")
-    def offset(self, upload_id: FromPath[str], request: AuthedRequest, services: ServicesDep) -> Response[None]:
+    def offset(self, upload_id: IdPath, request: AuthedRequest, services: ServicesDep) -> Response[None]:
         _require_tus(request)
         state = services.uploads.status(request.user, upload_id)
         return Response(None, status_code=200, headers={**_headers(state), "Upload-Length": str(state.length)})
@@ -115,7 +116,7 @@ class UploadController(Controller):
     @route("/{upload_id:str}", http_method=[HttpMethod.PATCH], status_code=204, request_max_body_size=None,
            summary="Send bytes from Upload-Offset (application/offset+octet-stream)")  # fmt: skip
     async def append(
-        self, upload_id: FromPath[str], request: AuthedRequest, services: ServicesDep,
+        self, upload_id: IdPath, request: AuthedRequest, services: ServicesDep,
         upload_offset: Annotated[int, HeaderParameter(name="Upload-Offset", ge=0)],
         upload_checksum: Annotated[str | None, HeaderParameter(name="Upload-Checksum")] = None,
     ) -> Response[None]:  # fmt: skip
@@ -123,7 +124,7 @@ class UploadController(Controller):
 
     @post("/{upload_id:str}", status_code=204, request_max_body_size=None, include_in_schema=False)
     async def overridden(
-        self, upload_id: FromPath[str], request: AuthedRequest, services: ServicesDep,
+        self, upload_id: IdPath, request: AuthedRequest, services: ServicesDep,
         method: Annotated[str, HeaderParameter(name="X-HTTP-Method-Override")],
         upload_offset: Annotated[int | None, HeaderParameter(name="Upload-Offset", ge=0)] = None,
         upload_checksum: Annotated[str | None, HeaderParameter(name="Upload-Checksum")] = None,
@@ -138,13 +139,13 @@ class UploadController(Controller):
         raise BadRequest("X-HTTP-Method-Override must be PATCH (with Upload-Offset) or DELETE")
 
     @delete("/{upload_id:str}", sync_to_thread=True, status_code=204, summary="Abandon an upload (tus termination)")
-    def terminate(self, upload_id: FromPath[str], request: AuthedRequest, services: ServicesDep) -> Response[None]:
+    def terminate(self, upload_id: IdPath, request: AuthedRequest, services: ServicesDep) -> Response[None]:
         _require_tus(request)
         services.uploads.terminate(request.user, upload_id)
         return Response(None, status_code=204, headers={"Tus-Resumable": TUS_VERSION})
 
     @get("/{upload_id:str}", sync_to_thread=True, summary="The upload, and once complete its asset and quality verdict")
-    def read(self, upload_id: FromPath[str], request: AuthedRequest, services: ServicesDep) -> UploadStatus:
+    def read(self, upload_id: IdPath, request: AuthedRequest, services: ServicesDep) -> UploadStatus:
         state = services.uploads.status(request.user, upload_id)
         asset = services.assets.get(request.user, state.asset_id) if state.asset_id else None
         return UploadStatus(id=state.id, encounter_id=state.encounter_id, length=state.length, offset=state.offset,

@@ -25,6 +25,7 @@ class TransferService:
         if who.role not in SENDERS:
             raise Forbidden("only a clinician may send a case to the burn center")
         require_read(who, RecordKind.encounter)
+        store.get_head(self.db.connection(), RecordKind.encounter, encounter_id)  # NotFound before anything about keys
         return self.sync.queue(encounter_id, who.username)
 
     def transfers(self, who: Principal, encounter_id: str) -> list[OutboxEntry]:

@@ -18,6 +18,7 @@ from litestar.params import Dependency, FromPath, JSONBody, QueryParameter
 from gateway import __version__
 from gateway.authentication import session_auth
 from gateway.controllers.auth import AdminController, AuthController
+from gateway.controllers.common import IdPath, SiteIdPath
 from gateway.controllers.health import health
 from gateway.dependencies import AuthedRequest
 from gateway.errors import EXCEPTION_HANDLERS
@@ -86,19 +87,19 @@ class CaseController(Controller):
         return services.cases.list_cases(request.user, include_superseded=include_superseded)
 
     @get("/{site_id:str}/{bundle_id:str}", sync_to_thread=False, summary="A case: summary, parts, versions, notes")
-    def case(self, site_id: FromPath[str], bundle_id: FromPath[str], request: AuthedRequest,
+    def case(self, site_id: SiteIdPath, bundle_id: IdPath, request: AuthedRequest,
              services: CentralDep) -> CaseDetail:  # fmt: skip
         return services.cases.case(request.user, site_id, bundle_id)
 
     @get("/{site_id:str}/{bundle_id:str}/parts/{name:path}", sync_to_thread=True, summary="One file of a case")
-    def part(self, site_id: FromPath[str], bundle_id: FromPath[str], name: FromPath[str], request: AuthedRequest,
+    def part(self, site_id: SiteIdPath, bundle_id: IdPath, name: FromPath[str], request: AuthedRequest,
              services: CentralDep) -> Response[bytes]:  # fmt: skip
         data, media_type = services.cases.part(request.user, site_id, bundle_id, name.lstrip("/"))
         return Response(content=data, media_type=media_type)
 
     @post("/{site_id:str}/{bundle_id:str}/notes", sync_to_thread=True, status_code=201,
           summary="Write advice on a case; it travels to the clinic encrypted and signed")  # fmt: skip
-    def write_note(self, site_id: FromPath[str], bundle_id: FromPath[str], data: JSONBody[NoteRequest],
+    def write_note(self, site_id: SiteIdPath, bundle_id: IdPath, data: JSONBody[NoteRequest],
                    request: AuthedRequest, services: CentralDep) -> NoteStatus:  # fmt: skip
         return services.cases.write_note(request.user, site_id, bundle_id, data)
 

@@ -17,14 +17,15 @@ from gateway.storage.database import Database
 from schemas.base import ID_PATTERN, iso, utcnow
 from schemas.config import CentralConfig
 from schemas.errors import BurnedgeError, TransferRejected
+from schemas.transfer import SITE_ID_PATTERN
 from sync.central.receiver import Receiver
 from sync.wire import refusal
 from sync.zenoh_link import Keys, center_session_config
 
 log = logging.getLogger("burnedge.central")
-_SITE = re.compile(r"^[a-z0-9][a-z0-9-]{1,62}$")
+_SITE = re.compile(SITE_ID_PATTERN)
 _ID = re.compile(ID_PATTERN)
-_SHA = re.compile(r"^[0-9a-f]{64}$")
+_SHA = re.compile(r"\A[0-9a-f]{64}\Z")
 KEEP_REJECTIONS = 10_000
 
 
