@@ -407,6 +407,28 @@ class SyncConfig(Message):
     """First part of every Zenoh key expression; must match the center's."""
 
 
+class BackupConfig(Message):
+    """Encrypted backups of the whole gateway state (`burnedge backup`, the nightly timer); docs/backup.md."""
+
+    folder: str = ""
+    """Folder of the rotated backups that `burnedge backup` without --out writes (the nightly timer); best a disk
+    that is not the gateway's own (a USB disk, a network share). Empty: --out or --dir must be given."""
+    keep: Annotated[int, msgspec.Meta(ge=1, le=1000)] = 7
+    """Backups kept in the folder; the oldest beyond this many are removed after each new one is complete."""
+    recipient: str = ""
+    """Public key file (from `burnedge backup keygen`) to encrypt to; its private half is kept off the gateway, so
+    nothing on the gateway can open its backups. Empty: encrypt to a passphrase."""
+    passphrase_file: str = ""
+    """File holding the passphrase, when no recipient is set (e.g. a systemd credential); readable by the service
+    user only. Empty: --passphrase-file, --passphrase-env or a prompt."""
+    kdf_opslimit: Annotated[int, msgspec.Meta(ge=1, le=64)] = 3
+    """Argon2id passes deriving the key from a passphrase (libsodium's "moderate")."""
+    kdf_memory_kib: Annotated[int, msgspec.Meta(ge=8, le=4 * 1024**2)] = 256 * 1024
+    """Argon2id memory in KiB (256 MiB, libsodium's "moderate"); a restore needs as much."""
+    chunk_kib: Annotated[int, msgspec.Meta(ge=4, le=65536)] = 1024
+    """Plain size of each authenticated chunk of the encrypted stream; memory stays at about this much."""
+
+
 class CentralConfig(Message):
     """The burn center's server (`burnedge central`)."""
 
@@ -463,6 +485,8 @@ class Config(Message):
     """Sending cases to the burn center and receiving its advice (the clinic's side)."""
     central: CentralConfig = msgspec.field(default_factory=CentralConfig)
     """The burn center's server."""
+    backup: BackupConfig = msgspec.field(default_factory=BackupConfig)
+    """Encrypted backups of the whole gateway state."""
 
 
 def load_config(path: str | Path | None = None, environ: dict[str, str] | None = None) -> Config:
@@ -480,7 +504,8 @@ def load_config(path: str | Path | None = None, environ: dict[str, str] | None =
                 ("quality", QualityGateConfig), ("uploads", UploadConfig), ("frames", FramesConfig),
                 ("readiness", ReadinessConfig), ("reconstruction", ReconstructionConfig),
                 ("analysis", AnalysisConfig), ("jobs", JobsConfig),
-                ("tracking", TrackingConfig), ("sync", SyncConfig), ("central", CentralConfig))  # fmt: skip
+                ("tracking", TrackingConfig), ("sync", SyncConfig), ("central", CentralConfig),
+                ("backup", BackupConfig))  # fmt: skip
     for section, struct in sections:
         defaults = struct()
         for field in struct.__struct_fields__:
