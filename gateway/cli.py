@@ -11,7 +11,7 @@ from pathlib import Path
 
 import msgspec
 
-from gateway import cli_analysis, cli_sync
+from gateway import cli_analysis, cli_backup, cli_sync
 from schemas.config import Config, load_config
 from schemas.errors import AuthenticationFailed, BurnedgeError, Conflict, InvalidInput, NotFound
 
@@ -128,7 +128,7 @@ def cmd_audit_verify(args: argparse.Namespace) -> int:
         raise NotFound(f"no database at {config.gateway.database}")
     db = Database.from_config(config.gateway)
     try:
-        result = verify(db, None)
+        result = verify(db, None, config)
     finally:
         db.close()
     print(json.dumps(msgspec.to_builtins(result)))
@@ -265,6 +265,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     cli_analysis.add_commands(sub, _config)
     cli_sync.add_commands(sub, _config)
+    cli_backup.add_commands(sub, _config)
 
     phantom = sub.add_parser("phantom", help="render a burn phantom: multi-view photos with exact ground truth")
     phantom.add_argument("--out", required=True, metavar="DIR", help="folder for images/, masks/, ground_truth.json")

@@ -28,3 +28,24 @@ class AuditVerification(Frozen):
     entries: int
     first_broken_seq: int | None
     reason: str
+
+
+class AuditHead(Frozen):
+    """The newest entry of a chain: its sequence number and hash. Whoever holds a copy can later tell whether the
+    chain was cut back or rewritten up to it."""
+
+    seq: int
+    hash: str
+
+
+class AuditAnchor(Frozen):
+    """A burn center's signed statement that a clinic's chain had reached `head` (kind "audit-anchor").
+
+    The clinic keeps the newest one in its keys folder, outside the database, and `audit verify` checks the chain
+    against it; the center keeps every one it signed, per site."""
+
+    site_id: str
+    center_id: str
+    head: AuditHead
+    anchored_at: str
+    """The center's UTC time, ISO 8601."""

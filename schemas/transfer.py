@@ -12,6 +12,7 @@ from typing import Annotated
 
 import msgspec
 
+from schemas.audit import AuditHead
 from schemas.base import Frozen, Id, LongText, ShortText
 
 SITE_ID_PATTERN = r"\A[a-z0-9][a-z0-9-]{1,62}\Z"
@@ -178,6 +179,28 @@ class MailRequest(Frozen):
     sent_at: str
 
 
+class AnchorRequest(Frozen):
+    """A clinic asking the center to anchor its audit chain's head (kind "anchor-request").
+
+    `previous` is the clinic's own entry at the sequence number the center anchored last, so the center can tell
+    that the chain still runs through it; None on the first anchor, or when the clinic does not know that number
+    (the center then answers 'need' with it)."""
+
+    site_id: SiteId
+    center_id: SiteId
+    head: AuditHead
+    previous: AuditHead | None
+    sent_at: str
+
+
+class AnchorReply(Frozen):
+    status: str
+    """'anchored' (`anchor` is the center's signed AuditAnchor) or 'need' (send again with `previous` at
+    `need_seq`)."""
+    anchor: SignedEnvelope | None = None
+    need_seq: int | None = None
+
+
 class SealedMessage(Frozen):
     """A message to one site: encrypted with a fresh key sealed to the recipient, then signed by the sender."""
 
@@ -270,3 +293,9 @@ class SyncStatus(Frozen):
     last_error: str | None
     next_round_at: str | None
     failures_in_a_row: int
+    audit_anchored_seq: int | None = None
+    """The newest entry of this gateway's audit chain that the burn center has anchored (signed and kept)."""
+    audit_anchored_at: str | None = None
+    audit_anchor_problem: str | None = None
+    """Set when the center refused to anchor the chain: it no longer runs through the entry anchored before
+    (entries removed, or the database replaced by an older copy). Run `burnedge audit verify`."""

@@ -17,6 +17,7 @@ import msgspec
 import zenoh
 
 from gateway.storage.database import Database
+from schemas.audit import AuditAnchor
 from schemas.config import Config
 from schemas.errors import TransferRejected
 from schemas.transfer import (
@@ -28,7 +29,7 @@ from schemas.transfer import (
     SiteIdentity,
     TransferManifest,
 )
-from sync import mailbox, peers
+from sync import anchor, mailbox, peers
 from sync.keys import SiteKeys, verify_envelope
 from sync.outbox import Outbox
 from sync.wire import LinkDown, error_text, request
@@ -44,6 +45,9 @@ class RoundReport:
     rejected: dict[str, str] = field(default_factory=dict)
     notes_received: int = 0
     chunks_sent: int = 0
+    anchor: AuditAnchor | None = None
+    anchor_problem: str | None = None
+    """The center's reason for refusing to anchor the audit chain (it no longer runs through the last anchor)."""
 
 
 class Sender:
@@ -75,6 +79,11 @@ class Sender:
                     self.outbox.failed_attempt(row["bundle_id"], exc.detail)
                     raise
             report.notes_received = mailbox.fetch(session, link, self.db, self.keys, center, self.config)
+            try:  # last: the notes just stored are audited entries too
+                report.anchor = anchor.exchange(session, link, self.db, self.keys, center, self.config)
+            except TransferRejected as exc:
+                log.error("the burn center refused to anchor this gateway's audit chain: %s", exc.detail)
+                report.anchor_problem = exc.detail
         return report
 
     def _deliver(self, session, link: Keys, center: SiteIdentity, row, report: RoundReport) -> None:

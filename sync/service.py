@@ -11,7 +11,6 @@ import datetime as dt
 import logging
 import random
 import threading
-from pathlib import Path
 
 from gateway.storage.database import Database
 from schemas.base import iso, utcnow
@@ -19,18 +18,13 @@ from schemas.config import Config
 from schemas.errors import BurnedgeError
 from schemas.transfer import OutboxEntry, OutboxState, SyncStatus
 from sync import peers
-from sync.keys import SiteKeys, load_keys
+from sync.anchor import anchor_path, load_anchor
+from sync.keys import SiteKeys, keys_dir, load_keys
 from sync.outbox import Outbox
 from sync.sender import RoundReport, Sender
 from sync.wire import LinkDown
 
 log = logging.getLogger("burnedge.sync")
-
-
-def keys_dir(config: Config) -> Path:
-    if config.sync.keys_dir:
-        return Path(config.sync.keys_dir)
-    return Path(config.gateway.database).resolve().parent / "burnedge-keys"
 
 
 class SyncService:
@@ -62,7 +56,7 @@ class SyncService:
             return None
         finally:
             self._round_lock.release()
-        self._succeeded()
+        self._succeeded(report)
         if report.delivered or report.notes_received or report.rejected:
             log.info("sync round: %d delivered, %d notes received, %d rejected", len(report.delivered),
                      report.notes_received, len(report.rejected))  # fmt: skip
@@ -87,12 +81,19 @@ class SyncService:
             center_id = peers.only_center(conn, self.config.sync.center_id).site_id
         except BurnedgeError:
             center_id = None
+        try:
+            kept = load_anchor(anchor_path(self.config), None)
+        except BurnedgeError:
+            kept = None  # audit verify names a damaged anchor; the status only reports a good one
         return SyncStatus(enabled=self.config.sync.enabled, site_id=site_id, center_id=center_id,
                           queued=counts.get(OutboxState.queued.value, 0),
                           delivered=counts.get(OutboxState.delivered.value, 0),
                           last_round_at=state.get("last_round_at"), last_success_at=state.get("last_success_at"),
                           last_error=state.get("last_error"), next_round_at=state.get("next_round_at"),
-                          failures_in_a_row=int(state.get("failures", 0)))  # fmt: skip
+                          failures_in_a_row=int(state.get("failures", 0)),
+                          audit_anchored_seq=kept.head.seq if kept else None,
+                          audit_anchored_at=kept.anchored_at if kept else None,
+                          audit_anchor_problem=state.get("audit_anchor_problem"))  # fmt: skip
 
     # backoff state ----------------------------------------------------------------
     def _state(self) -> dict[str, str]:
@@ -111,9 +112,11 @@ class SyncService:
         self._put(last_round_at=iso(now), last_error=reason, failures=str(failures),
                   next_round_at=iso(now + dt.timedelta(seconds=wait)))  # fmt: skip
 
-    def _succeeded(self) -> None:
+    def _succeeded(self, report: RoundReport) -> None:
         now = iso(utcnow())
-        self._put(last_round_at=now, last_success_at=now, failures="0", next_round_at=now, clear=("last_error",))
+        problem = {"audit_anchor_problem": report.anchor_problem} if report.anchor_problem else {}
+        clear = ("last_error",) if problem else ("last_error", "audit_anchor_problem")
+        self._put(last_round_at=now, last_success_at=now, failures="0", next_round_at=now, clear=clear, **problem)
 
     def _put(self, clear: tuple[str, ...] = (), **values: str) -> None:
         with self.db.write() as conn:

@@ -81,6 +81,9 @@ class Keys:
     def commit(self, site_id: str, bundle_id: str) -> str:
         return f"{self.prefix}/{self.center_id}/commit/{site_id}/{bundle_id}"
 
+    def anchor(self, site_id: str) -> str:
+        return f"{self.prefix}/{self.center_id}/anchor/{site_id}"
+
     def mail(self, site_id: str) -> str:
         return f"{self.prefix}/{self.center_id}/mail/{site_id}"
 

@@ -8,6 +8,7 @@ from litestar import Controller, Request, get, post
 from litestar.params import HeaderParameter, JSONBody, QueryParameter
 
 from gateway.controllers.common import IdPath
+from gateway.controllers.problems import BODY, ONE, SESSION, problems
 from gateway.dependencies import AuthedRequest, ServicesDep, client_address
 from gateway.services import audit_trail
 from schemas.accounts import (
@@ -30,7 +31,8 @@ class AuthController(Controller):
     tags = ["auth"]
 
     @post("/login", sync_to_thread=True, status_code=200, exclude_from_auth=True,
-          summary="Exchange username and password for a session token")  # fmt: skip
+          summary="Exchange username and password for a session token",
+          responses=problems(*BODY, 401, 429))  # fmt: skip
     def login(
         self, request: Request, data: JSONBody[LoginRequest], services: ServicesDep,
         device_token: Annotated[str | None, HeaderParameter(name="X-Device-Token")] = None,
@@ -40,15 +42,16 @@ class AuthController(Controller):
         )
 
     @post("/pair", sync_to_thread=True, status_code=201, exclude_from_auth=True,
-          summary="Exchange a one-time pairing code for this phone's device token")  # fmt: skip
+          summary="Exchange a one-time pairing code for this phone's device token",
+          responses=problems(*BODY, 401, 429))  # fmt: skip
     def pair(self, request: Request, data: JSONBody[PairRequest], services: ServicesDep) -> DeviceToken:
         return services.accounts.pair(data, client=client_address(request))
 
-    @post("/logout", sync_to_thread=True, status_code=204, summary="End this session")
+    @post("/logout", sync_to_thread=True, status_code=204, summary="End this session", responses=problems(401))
     def logout(self, request: AuthedRequest, services: ServicesDep) -> None:
         services.accounts.logout(request.user)
 
-    @get("/me", sync_to_thread=False, summary="Who am I")
+    @get("/me", sync_to_thread=False, summary="Who am I", responses=problems(401))
     def me(self, request: AuthedRequest) -> Identity:
         p = request.user
         return Identity(user_id=p.user_id, username=p.username, role=p.role, device_id=p.device_id)
@@ -58,39 +61,42 @@ class AdminController(Controller):
     path = "/api/v1/admin"
     tags = ["admin"]
 
-    @post("/users", sync_to_thread=True, summary="Create a user account")
+    @post("/users", sync_to_thread=True, summary="Create a user account", responses=problems(*BODY, *SESSION, 409))
     def create_user(self, data: JSONBody[UserCreate], request: AuthedRequest, services: ServicesDep) -> User:
         return services.accounts.create_user(request.user, data)
 
     @post("/users/{user_id:str}/disable", sync_to_thread=True, status_code=200,
-          summary="Disable an account: its sessions end at once")  # fmt: skip
+          summary="Disable an account: its sessions end at once", responses=problems(*ONE, 409))  # fmt: skip
     def disable_user(self, user_id: IdPath, request: AuthedRequest, services: ServicesDep) -> User:
         return services.accounts.set_active(request.user, user_id, False)
 
-    @post("/users/{user_id:str}/enable", sync_to_thread=True, status_code=200, summary="Re-enable an account")
+    @post("/users/{user_id:str}/enable", sync_to_thread=True, status_code=200, summary="Re-enable an account",
+          responses=problems(*ONE, 409))  # fmt: skip
     def enable_user(self, user_id: IdPath, request: AuthedRequest, services: ServicesDep) -> User:
         return services.accounts.set_active(request.user, user_id, True)
 
-    @get("/users", sync_to_thread=False, summary="List user accounts")
+    @get("/users", sync_to_thread=False, summary="List user accounts", responses=problems(*SESSION))
     def list_users(self, request: AuthedRequest, services: ServicesDep) -> list[User]:
         return services.accounts.list_users(request.user)
 
-    @post("/pairing-codes", sync_to_thread=True, summary="Create a short-lived one-time code to pair a phone")
+    @post("/pairing-codes", sync_to_thread=True, summary="Create a short-lived one-time code to pair a phone",
+          responses=problems(*BODY, *SESSION))  # fmt: skip
     def pairing_code(
         self, data: JSONBody[PairingCodeRequest], request: AuthedRequest, services: ServicesDep
     ) -> PairingCode:
         return services.accounts.create_pairing_code(request.user, data)
 
-    @get("/devices", sync_to_thread=False, summary="List paired phones")
+    @get("/devices", sync_to_thread=False, summary="List paired phones", responses=problems(*SESSION))
     def devices(self, request: AuthedRequest, services: ServicesDep) -> list[Device]:
         return services.accounts.list_devices(request.user)
 
     @post("/devices/{device_id:str}/revoke", sync_to_thread=True, status_code=200,
-          summary="Revoke a phone: its token and sessions stop working at once")  # fmt: skip
+          summary="Revoke a phone: its token and sessions stop working at once", responses=problems(*ONE))  # fmt: skip
     def revoke(self, device_id: IdPath, request: AuthedRequest, services: ServicesDep) -> Device:
         return services.accounts.revoke_device(request.user, device_id)
 
-    @get("/audit", sync_to_thread=False, summary="Audit entries after a sequence number")
+    @get("/audit", sync_to_thread=False, summary="Audit entries after a sequence number",
+         responses=problems(400, *SESSION))  # fmt: skip
     def audit_entries(
         self, request: AuthedRequest, services: ServicesDep,
         after: Annotated[int, QueryParameter(ge=0, le=2**63 - 1, description="Last sequence number already read")] = 0,
@@ -100,4 +106,4 @@ class AdminController(Controller):
 
     @get("/audit/verify", sync_to_thread=True, summary="Check the audit hash chain; names the first broken entry")
     def audit_verify(self, request: AuthedRequest, services: ServicesDep) -> AuditVerification:
-        return audit_trail.verify(services.db, request.user)
+        return audit_trail.verify(services.db, request.user, services.config)

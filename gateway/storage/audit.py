@@ -3,8 +3,10 @@
 Each entry's hash covers its own fields and the previous entry's hash, so changing,
 inserting or removing a past entry breaks the chain. Entries that record a record
 version also carry that version's content hash, so editing stored record data is
-detected too. Removing entries from the end is only detectable against a head hash
-kept elsewhere (see docs/security.md).
+detected too. Every record head must point at the newest version the chain recorded, so
+a head moved back to an older version (a rolled-back record) is detected. Removing entries
+from the end is detectable against a head kept elsewhere: the burn center's signed anchor
+(see docs/security.md).
 """
 
 from __future__ import annotations
@@ -15,7 +17,7 @@ import sqlite3
 from collections.abc import Iterator
 
 from gateway.storage.records import insert_version, version_content_hash
-from schemas.audit import AuditEntry, AuditVerification
+from schemas.audit import AuditAnchor, AuditEntry, AuditHead, AuditVerification
 from schemas.base import iso, utcnow
 from schemas.records import RecordKind
 
@@ -98,14 +100,28 @@ def entries(conn: sqlite3.Connection, after_seq: int = 0, limit: int | None = No
         yield AuditEntry(**dict(row))
 
 
-def verify(conn: sqlite3.Connection) -> AuditVerification:
-    """Walk the chain from the start; name the first entry that does not fit.
+def head(conn: sqlite3.Connection) -> AuditHead | None:
+    """The newest entry's sequence number and hash; None for an empty chain (a database never written)."""
+    row = conn.execute("SELECT seq, hash FROM audit_log ORDER BY seq DESC LIMIT 1").fetchone()
+    return AuditHead(seq=row["seq"], hash=row["hash"]) if row else None
+
+
+def hash_at(conn: sqlite3.Connection, seq: int) -> str | None:
+    row = conn.execute("SELECT hash FROM audit_log WHERE seq = ?", (seq,)).fetchone()
+    return row["hash"] if row else None
+
+
+def verify(conn: sqlite3.Connection, anchor: AuditAnchor | None = None) -> AuditVerification:
+    """Walk the chain from the start; name the first entry that does not fit, then check that every record head
+    is the newest version the chain recorded, then that the chain still reaches `anchor` unchanged.
 
     When entry N was rewritten with a recomputed hash, N itself looks intact and the
     break shows at N + 1: the chain can say where it stops holding, not who forged what.
     """
     expected_prev = GENESIS_HASH
     count = 0
+    newest: dict[tuple[str, str], tuple[int, int]] = {}
+    """(kind, id) -> (version, seq of the entry that recorded it)."""
     for entry in entries(conn):
         count += 1
         fields = {name: getattr(entry, name) for name in _HASHED_FIELDS}
@@ -120,8 +136,58 @@ def verify(conn: sqlite3.Connection) -> AuditVerification:
         problem = _record_content_problem(conn, entry)
         if problem:
             return _broken(entry.seq, problem)
+        if entry.content_hash is not None:
+            newest[(entry.kind, entry.record_id)] = (entry.after_version, entry.seq)
         expected_prev = entry.hash
-    return AuditVerification(ok=True, entries=count, first_broken_seq=None, reason=f"all {count} entries intact")
+    if anchor is not None:  # first: a chain cut back also leaves heads unrecorded, but this says what happened
+        problem = _anchor_problem(conn, anchor, count)
+        if problem:
+            return _broken(anchor.head.seq, problem)
+    problem = _head_problem(conn, newest)
+    if problem:
+        return _broken(*problem)
+    anchored = f"; reaches the burn center's anchor (entry {anchor.head.seq}, {anchor.anchored_at})" if anchor else ""
+    return AuditVerification(ok=True, entries=count, first_broken_seq=None,
+                             reason=f"all {count} entries intact; every record served is its newest audited version"
+                             f"{anchored}")  # fmt: skip
+
+
+def _head_problem(conn: sqlite3.Connection, newest: dict[tuple[str, str], tuple[int, int]]) -> tuple[int, str] | None:
+    """What the API serves (record_heads) against what the chain recorded last, record by record."""
+    unseen = dict(newest)
+    rows = conn.execute(
+        "SELECT h.kind, h.id, h.deleted AS head_deleted, v.kind AS v_kind, v.id AS v_id, v.version, v.deleted"
+        " FROM record_heads h LEFT JOIN record_versions v ON v.seq = h.seq ORDER BY h.kind, h.id"
+    )
+    for row in rows:
+        key = (row["kind"], row["id"])
+        what = f"{row['kind']} {row['id']}"
+        recorded = unseen.pop(key, None)
+        if recorded is None:
+            return 0, f"{what} is served but no audit entry records it: it was written outside the gateway"
+        version, seq = recorded
+        if (row["v_kind"], row["v_id"]) != key:
+            return seq, f"{what} is served from a version row that is missing or belongs to another record"
+        if row["version"] != version:
+            change = "rolled back to" if row["version"] < version else "moved to unaudited"
+            return seq, (f"{what} is served at version {row['version']}, but entry {seq} recorded version {version} "
+                         f"as its newest: the record was {change} version {row['version']}")  # fmt: skip
+        if bool(row["head_deleted"]) != bool(row["deleted"]):
+            return seq, f"{what}: its withdrawn flag does not match its newest version"
+    for (kind, record_id), (version, seq) in unseen.items():
+        return seq, f"{kind} {record_id} version {version}, recorded by entry {seq}, is no longer served: head removed"
+    return None
+
+
+def _anchor_problem(conn: sqlite3.Connection, anchor: AuditAnchor, count: int) -> str | None:
+    seq, when = anchor.head.seq, anchor.anchored_at
+    if count < seq:
+        return (f"the chain ends at entry {count}, but burn center {anchor.center_id} anchored entry {seq} on {when}: "
+                f"entries {count + 1} to {seq} were removed, or the database was replaced by an older copy")  # fmt: skip
+    if hash_at(conn, seq) != anchor.head.hash:
+        return (f"entry {seq} is not the one burn center {anchor.center_id} anchored on {when}: the chain up to it "
+                "was rewritten")  # fmt: skip
+    return None
 
 
 def _record_content_problem(conn: sqlite3.Connection, entry: AuditEntry) -> str | None:

@@ -18,6 +18,7 @@ from schemas.base import ID_PATTERN, iso, utcnow
 from schemas.config import CentralConfig
 from schemas.errors import BurnedgeError, TransferRejected
 from schemas.transfer import SITE_ID_PATTERN
+from sync.central.anchors import AnchorBook
 from sync.central.receiver import Receiver
 from sync.wire import refusal
 from sync.zenoh_link import Keys, center_session_config
@@ -34,6 +35,7 @@ class Endpoint:
         self.db = db
         self.config = config
         self.receiver = receiver
+        self.anchors = AnchorBook(db, receiver.keys, receiver.verified)
         self.link = Keys(config.key_prefix, receiver.keys.site_id)
         self._session = None
         self._queryable = None
@@ -82,7 +84,7 @@ class Endpoint:
             verb, rest = self.link.parse(key)
         except ValueError as exc:
             raise TransferRejected(str(exc), code="garbage") from exc
-        shapes = {"announce": 1, "chunk": 4, "commit": 2, "mail": 1}
+        shapes = {"announce": 1, "chunk": 4, "commit": 2, "mail": 1, "anchor": 1}
         if shapes.get(verb) != len(rest) or not _SITE.match(rest[0]):
             raise TransferRejected(f"no such request: {key}", code="garbage")
         if len(rest) > 1 and not _ID.match(rest[1]):
@@ -99,6 +101,8 @@ class Endpoint:
             return b"ok"
         if verb == "commit":
             return msgspec.msgpack.encode(self.receiver.commit(rest[0], rest[1]))
+        if verb == "anchor":
+            return msgspec.msgpack.encode(self.anchors.anchor(rest[0], payload))
         return msgspec.msgpack.encode(self.receiver.mail(rest[0], payload))
 
     def _rejected(self, key: str, site_id: str | None, exc: TransferRejected) -> None:

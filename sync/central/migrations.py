@@ -90,3 +90,18 @@ def c001_center(db: Database) -> None:
             key TEXT NOT NULL
         )"""
     )
+
+
+@central_migrations()
+def c002_audit_anchors(db: Database) -> None:
+    """Every audit-chain head a clinic had anchored: a later head must still run through the newest one."""
+    db.execute(
+        """
+        CREATE TABLE audit_anchors (
+            site_id TEXT NOT NULL,
+            seq INTEGER NOT NULL,
+            hash TEXT NOT NULL,
+            anchored_at TEXT NOT NULL,
+            PRIMARY KEY (site_id, seq)
+        ) WITHOUT ROWID"""
+    )

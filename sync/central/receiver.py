@@ -59,7 +59,7 @@ class Receiver:
 
     # announce ----------------------------------------------------------------------
     def announce(self, site_id: str, payload: bytes) -> AnnounceReply:
-        envelope, identity = self._verified(site_id, payload, "manifest")
+        envelope, identity = self.verified(site_id, payload, "manifest")
         manifest = _decode(_manifest, envelope.body, "manifest")
         self._check_manifest(site_id, manifest)
         conn = self.db.connection()
@@ -180,7 +180,7 @@ class Receiver:
 
     # mail ---------------------------------------------------------------------------
     def mail(self, site_id: str, payload: bytes) -> list[SignedEnvelope]:
-        envelope, _ = self._verified(site_id, payload, "mail-request")
+        envelope, _ = self.verified(site_id, payload, "mail-request")
         ask = _decode(msgspec.msgpack.Decoder(MailRequest), envelope.body, "mail request")
         if ask.site_id != site_id or ask.center_id != self.keys.site_id:
             raise TransferRejected("the mail request names another site or center", code="misaddressed")
@@ -207,7 +207,7 @@ class Receiver:
         return len(rows)
 
     # checks -------------------------------------------------------------------------
-    def _verified(self, site_id: str, payload: bytes, kind: str) -> tuple[SignedEnvelope, SiteIdentity]:
+    def verified(self, site_id: str, payload: bytes, kind: str) -> tuple[SignedEnvelope, SiteIdentity]:
         envelope = _decode(_envelope, payload, kind)
         if envelope.protocol != PROTOCOL:
             raise TransferRejected(f"protocol {envelope.protocol} is not spoken here (this center speaks {PROTOCOL})",
