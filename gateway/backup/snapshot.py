@@ -1,0 +1,156 @@
+"""What the gateway's state is, where each part lives, and one consistent copy of it while the gateway runs.
+
+The order is what makes the copy consistent:
+1. the keys folder is read first (small files, replaced by rename): the burn center's audit anchor kept there then
+   never names a later audit entry than the database copy holds;
+2. the database is copied through SQLite's backup API in one step, a snapshot of one moment (WAL: writers go on);
+3. from that copy, and only from it: which blobs, finished analyses and queued bundles to take. Blobs are stored
+   under their SHA-256 and never change; a finished analysis's files were written before it was marked done; a
+   bundle's chunks are synced before its outbox row commits. So nothing the snapshot refers to is half-written,
+   and each copied blob is hashed again against its name. Uploads still in progress are left out (the phone
+   sends them again: their offset starts at 0), and so are analyses not yet finished (they run again).
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+import sqlite3
+import tempfile
+from collections.abc import Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass
+from pathlib import Path
+
+from gateway.jobs.folders import SCRATCH, work_root
+from gateway.storage.blobs import media_root
+from schemas.audit import AuditHead
+from schemas.config import Config
+from schemas.errors import NotFound, StorageError
+from sync.keys import PUBLIC_FILE, keys_dir
+from sync.outbox import outbox_root
+
+
+@dataclass(frozen=True)
+class StateLayout:
+    """Where each part of a gateway's state lives (from the configuration)."""
+
+    database: Path
+    media: Path
+    analyses: Path
+    outbox: Path
+    keys: Path
+
+    @classmethod
+    def of(cls, config: Config) -> StateLayout:
+        return cls(database=Path(config.gateway.database), media=media_root(config), analyses=work_root(config),
+                   outbox=outbox_root(config), keys=keys_dir(config))  # fmt: skip
+
+
+@dataclass
+class Snapshot:
+    """The database copy and what it refers to; `files` are (name in the archive, path on disk)."""
+
+    database: Path
+    audit_head: AuditHead | None
+    migrations: list[str]
+    site_id: str | None
+    keys: dict[str, bytes]
+    blobs: list[tuple[str, Path, str]]
+    files: list[tuple[str, Path]]
+    outbox: list[tuple[str, Path]]
+
+
+def read_keys(folder: Path) -> dict[str, bytes]:
+    if not folder.is_dir():
+        return {}
+    return {p.name: p.read_bytes() for p in sorted(folder.iterdir()) if p.is_file() and not p.name.endswith(".tmp")}
+
+
+def copy_database(source: Path, target: Path) -> None:
+    """One-step online backup into a single self-contained file (journal mode DELETE, no -wal beside it)."""
+    if not source.is_file():
+        raise NotFound(f"no database at {source}: check [gateway] database or --db")
+    try:
+        src = sqlite3.connect(source, timeout=30)
+        dst = sqlite3.connect(target)
+        try:
+            src.backup(dst)  # pages=-1: all pages under one read transaction, the same moment throughout
+            dst.execute("PRAGMA journal_mode = DELETE")
+            check = dst.execute("PRAGMA quick_check").fetchone()[0]
+        finally:
+            dst.close()
+            src.close()
+    except sqlite3.DatabaseError as exc:
+        raise StorageError(f"could not copy the database {source}: {exc}") from exc
+    if check != "ok":
+        raise StorageError(f"the database {source} fails SQLite's integrity check ({check}): repair it first")
+
+
+@contextmanager
+def take(config: Config) -> Iterator[Snapshot]:
+    """The snapshot, staged in a private folder beside the database (no less protected than the database); the
+    folder is removed afterwards."""
+    layout = StateLayout.of(config)
+    keys = read_keys(layout.keys)
+    staging = Path(tempfile.mkdtemp(prefix=".burnedge-backup-", dir=layout.database.resolve().parent))
+    try:
+        copy = staging / layout.database.name
+        copy_database(layout.database, copy)
+        conn = sqlite3.connect(copy)
+        conn.row_factory = sqlite3.Row
+        try:
+            yield _refer(conn, copy, layout, keys)
+        finally:
+            conn.close()
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)
+
+
+def _refer(conn: sqlite3.Connection, copy: Path, layout: StateLayout, keys: dict[str, bytes]) -> Snapshot:
+    tables = {r[0] for r in conn.execute("SELECT name FROM sqlite_master WHERE type = 'table'")}
+
+    def rows(sql: str, table: str) -> list[sqlite3.Row]:
+        return conn.execute(sql).fetchall() if table in tables else []
+
+    migrations = [r["name"] for r in rows("SELECT name FROM _sqlite_migrations WHERE migration_set = 'burnedge'"
+                                          " ORDER BY id", "_sqlite_migrations")]  # fmt: skip
+    head = rows("SELECT seq, hash FROM audit_log ORDER BY seq DESC LIMIT 1", "audit_log")
+    blobs = [(f"media/blobs/{sha[:2]}/{sha}", layout.media / "blobs" / sha[:2] / sha, sha)
+             for (sha,) in rows("SELECT DISTINCT sha256 FROM assets ORDER BY sha256", "assets")]  # fmt: skip
+    files: list[tuple[str, Path]] = []
+    done = rows("SELECT id, patient_id FROM analysis_jobs WHERE state = 'done' ORDER BY id", "analysis_jobs")
+    for row in done:
+        files += _analysis_files(layout.analyses / row["id"], f"analyses/{row['id']}")
+    for patient in sorted({row["patient_id"] for row in done}):
+        track = layout.analyses / "patients" / patient / "track.json"
+        if track.is_file():  # the per-visit registrations beside it are a cache, rebuilt on the next analysis
+            files.append((f"analyses/patients/{patient}/track.json", track))
+    outbox = [(f"outbox/{r['bundle_id']}/{i:06d}.chunk", layout.outbox / r["bundle_id"] / f"{i:06d}.chunk")
+              for r in rows("SELECT bundle_id, chunks FROM outbox WHERE state = 'queued' ORDER BY bundle_id", "outbox")
+              for i in range(r["chunks"])]  # fmt: skip
+    site_id = None
+    if PUBLIC_FILE in keys:
+        try:
+            site_id = json.loads(keys[PUBLIC_FILE]).get("site_id")
+        except (ValueError, AttributeError):
+            site_id = None
+    return Snapshot(database=copy, audit_head=AuditHead(seq=head[0]["seq"], hash=head[0]["hash"]) if head else None,
+                    migrations=migrations, site_id=site_id, keys=keys, blobs=blobs, files=files,
+                    outbox=outbox)  # fmt: skip
+
+
+def _analysis_files(folder: Path, prefix: str) -> list[tuple[str, Path]]:
+    """A finished analysis's files, without the scratch the retention clean-up removes anyway."""
+    if not folder.is_dir():
+        return []
+    found = []
+    for path in sorted(folder.rglob("*")):
+        rel = path.relative_to(folder).as_posix()
+        if (
+            path.is_file()
+            and not path.name.endswith(".tmp")
+            and not any(rel == part or rel.startswith(part + "/") for part in SCRATCH)
+        ):
+            found.append((f"{prefix}/{rel}", path))
+    return found
