@@ -112,8 +112,8 @@ def hash_at(conn: sqlite3.Connection, seq: int) -> str | None:
 
 
 def verify(conn: sqlite3.Connection, anchor: AuditAnchor | None = None) -> AuditVerification:
-    """Walk the chain from the start; name the first entry that does not fit, then check that every record head
-    is the newest version the chain recorded, then that the chain still reaches `anchor` unchanged.
+    """Walk the chain from the start and name the first entry that does not fit; then check that the chain still
+    reaches `anchor` unchanged, and that every record head is the newest version the chain recorded.
 
     When entry N was rewritten with a recomputed hash, N itself looks intact and the
     break shows at N + 1: the chain can say where it stops holding, not who forged what.
@@ -142,10 +142,11 @@ def verify(conn: sqlite3.Connection, anchor: AuditAnchor | None = None) -> Audit
     if anchor is not None:  # first: a chain cut back also leaves heads unrecorded, but this says what happened
         problem = _anchor_problem(conn, anchor, count)
         if problem:
-            return _broken(anchor.head.seq, problem)
+            return AuditVerification(ok=False, entries=count, first_broken_seq=anchor.head.seq, reason=problem)
     problem = _head_problem(conn, newest)
     if problem:
-        return _broken(*problem)
+        seq, reason = problem
+        return AuditVerification(ok=False, entries=count, first_broken_seq=seq or None, reason=reason)
     anchored = f"; reaches the burn center's anchor (entry {anchor.head.seq}, {anchor.anchored_at})" if anchor else ""
     return AuditVerification(ok=True, entries=count, first_broken_seq=None,
                              reason=f"all {count} entries intact; every record served is its newest audited version"
