@@ -6,7 +6,7 @@ libsodium secretstream chunks of a tar archive whose last member is the manifest
 
 from __future__ import annotations
 
-from typing import Annotated, Literal
+from typing import Annotated, Any, Literal
 
 import msgspec
 
@@ -76,7 +76,7 @@ class BackupManifest(Frozen, kw_only=True):
     database: str
     """The database snapshot's path inside the archive."""
     files: list[BackupFile]
-    settings: dict[str, dict[str, object]]
+    settings: dict[str, dict[str, Any]]
     """The settings that differed from the defaults (paths excepted), for the restored configuration."""
     skipped: list[str] = []
     """Why something the snapshot refers to is not in the backup (e.g. a bundle delivered while copying)."""
