@@ -277,7 +277,11 @@ def test_the_snapshot_takes_finished_analyses_without_scratch_and_leaves_running
     (work / "patients" / patient).mkdir(parents=True)
     (work / "patients" / patient / "track.json").write_text("{}")
     db.close()
+    stale = tmp_path / ".burnedge-backup-killed"  # left by a backup that was killed: a plain database copy
+    stale.mkdir()
+    (stale / "g.sqlite3").write_bytes(b"copy")
     with snapshot.take(config) as snap:
+        assert not stale.exists()
         names = sorted(name for name, _ in snap.files)
     assert names == [f"analyses/{done}/analysis/analysis.json", f"analyses/{done}/analysis/mesh/surface.ply",
                      f"analyses/patients/{patient}/track.json"]  # fmt: skip

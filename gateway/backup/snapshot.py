@@ -13,6 +13,7 @@ The order is what makes the copy consistent:
 
 from __future__ import annotations
 
+import fcntl
 import json
 import shutil
 import sqlite3
@@ -29,6 +30,8 @@ from schemas.config import Config
 from schemas.errors import NotFound, StorageError
 from sync.keys import PUBLIC_FILE, keys_dir
 from sync.outbox import outbox_root
+
+STAGING_PREFIX = ".burnedge-backup-"
 
 
 @dataclass(frozen=True)
@@ -93,7 +96,11 @@ def take(config: Config) -> Iterator[Snapshot]:
     folder is removed afterwards."""
     layout = StateLayout.of(config)
     keys = read_keys(layout.keys)
-    staging = Path(tempfile.mkdtemp(prefix=".burnedge-backup-", dir=layout.database.resolve().parent))
+    parent = layout.database.resolve().parent
+    _remove_stale_staging(parent)
+    staging = Path(tempfile.mkdtemp(prefix=STAGING_PREFIX, dir=parent))
+    lock = open(staging / ".lock", "w")  # held while in use: a later backup removes only unlocked, stale ones
+    fcntl.flock(lock, fcntl.LOCK_EX)
     try:
         copy = staging / layout.database.name
         copy_database(layout.database, copy)
@@ -105,6 +112,18 @@ def take(config: Config) -> Iterator[Snapshot]:
             conn.close()
     finally:
         shutil.rmtree(staging, ignore_errors=True)
+        lock.close()
+
+
+def _remove_stale_staging(parent: Path) -> None:
+    """Database copies left by a backup that was killed (each holds a plain copy of the database)."""
+    for folder in parent.glob(STAGING_PREFIX + "*"):
+        try:
+            with open(folder / ".lock", "a") as lock:
+                fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+                shutil.rmtree(folder, ignore_errors=True)
+        except OSError:  # in use by a running backup (or not ours to remove)
+            continue
 
 
 def _refer(conn: sqlite3.Connection, copy: Path, layout: StateLayout, keys: dict[str, bytes]) -> Snapshot:
