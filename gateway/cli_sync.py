@@ -101,6 +101,16 @@ def cmd_peers_revoke(args, config: Config) -> int:
     return 0
 
 
+def cmd_peers_accept_restore(args, config: Config) -> int:
+    from sync.central.anchors import accept_restore
+
+    if not args.center:
+        raise InvalidInput("accept-restore acts on the burn center's files: add --center")
+    with _database(config, True) as db:
+        _print(accept_restore(db, args.site_id, by=args.by, reason=args.reason))
+    return 0
+
+
 def cmd_peers_list(args, config: Config) -> int:
     from sync import peers
 
@@ -185,6 +195,13 @@ def add_commands(sub, load: Callable[[argparse.Namespace], Config]) -> None:
     revoke.add_argument("--by", default="cli", help="who revokes it (audited)")
     center_flag(revoke)
     bind(revoke, cmd_peers_revoke)
+    accept = peers.add_parser("accept-restore", help="at the center: a clinic was restored from a backup on purpose; "
+                              "void its audit anchors so its restored chain is anchored afresh")  # fmt: skip
+    accept.add_argument("site_id", metavar="SITE_ID")
+    accept.add_argument("--reason", required=True, help="e.g. 'disk failed; restored the backup of 2026-12-01'")
+    accept.add_argument("--by", default="cli", help="who accepts it (audited)")
+    center_flag(accept)
+    bind(accept, cmd_peers_accept_restore)
     listing = peers.add_parser("list", help="enrolled sites with fingerprints and revocations")
     center_flag(listing)
     bind(listing, cmd_peers_list)

@@ -11,7 +11,7 @@ import pytest
 
 from sync.anchor import ANCHOR_FILE
 from tests.conftest import patient_body
-from tests.sync_sites import CLINIC, Sites, wait_for
+from tests.sync_sites import CLINIC, Sites, cli, wait_for
 from tests.test_audit import _cli
 
 pytestmark = pytest.mark.server
@@ -74,3 +74,11 @@ def test_each_round_anchors_the_head_and_a_cut_back_chain_is_refused_by_the_cent
         codes = {r[0] for r in db.execute("SELECT code FROM rejections WHERE site_id = ?", (CLINIC,))}
     assert codes & {"audit-rollback", "audit-rewritten"}
     assert "refused to anchor" in sites.gateway.log.read_text()
+
+    # It was a restore on purpose, say: the center's IT person accepts it and the restored chain is anchored afresh.
+    accepted = json.loads(cli("peers", "accept-restore", CLINIC, "--center", "--by", "it-person", "--reason",
+                              "restored from last night's backup", env=sites.center.env))  # fmt: skip
+    assert accepted["anchors_voided"] >= 2 and accepted["last_anchored_seq"] == anchored_seq
+    wait_for(lambda: clinic.get("/api/v1/transfers/status", "status")["audit_anchor_problem"] is None, 30,
+             "a fresh anchor after the accepted restore")  # fmt: skip
+    assert anchor_file.exists()

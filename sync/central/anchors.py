@@ -4,7 +4,8 @@ signs and keeps it, provided the chain still runs through the head it anchored l
 The center cannot read a clinic's chain; it compares hashes. A head with a lower sequence number than the last
 anchored one means entries were removed or the clinic's database was replaced by an older copy; the same sequence
 number with another hash, or a later head whose entry at the anchored number differs, means the chain was
-rewritten. Either is refused with its reason, recorded in `rejections`, and the anchor stays where it was.
+rewritten. Either is refused with its reason, recorded in `rejections`, and the anchor stays where it was, until
+the center's IT person accepts a restore from a backup (`burnedge peers accept-restore SITE --center`).
 """
 
 from __future__ import annotations
@@ -14,11 +15,13 @@ from collections.abc import Callable
 
 import msgspec
 
+from gateway.storage import audit
 from gateway.storage.database import Database
 from schemas.audit import AuditAnchor, AuditHead
 from schemas.base import iso, utcnow
 from schemas.errors import TransferRejected
-from schemas.transfer import AnchorReply, AnchorRequest, SignedEnvelope, SiteIdentity
+from schemas.transfer import AnchorReply, AnchorRequest, SignedEnvelope, SiteIdentity, SiteRole
+from sync import peers
 from sync.keys import SiteKeys
 
 log = logging.getLogger("burnedge.central")
@@ -57,9 +60,23 @@ class AnchorBook:
 
     @staticmethod
     def latest(conn, site_id: str) -> tuple[int, str, str] | None:
-        row = conn.execute("SELECT seq, hash, anchored_at FROM audit_anchors WHERE site_id = ? ORDER BY seq DESC"
-                           " LIMIT 1", (site_id,)).fetchone()  # fmt: skip
+        row = conn.execute("SELECT seq, hash, anchored_at FROM audit_anchors WHERE site_id = ? AND voided_at IS NULL"
+                           " ORDER BY seq DESC, id DESC LIMIT 1", (site_id,)).fetchone()  # fmt: skip
         return (row["seq"], row["hash"], row["anchored_at"]) if row else None
+
+
+def accept_restore(db: Database, site_id: str, *, by: str, reason: str) -> dict:
+    """After a clinic was restored from a backup (a rollback on purpose): void its anchors, so its next round
+    anchors the restored chain afresh. Audited; the voided anchors stay in the table."""
+    with db.write() as conn:
+        peers.trusted(conn, site_id, SiteRole.clinic)
+        last = AnchorBook.latest(conn, site_id)
+        voided = conn.execute("UPDATE audit_anchors SET voided_at = ? WHERE site_id = ? AND voided_at IS NULL",
+                              (iso(utcnow()), site_id)).rowcount  # fmt: skip
+        audit.append(conn, action="peer.accept_restore", user_id=None, device_id=None, kind="peer", record_id=site_id,
+                     detail=f"by {by}: {reason}; {voided} anchors voided, last at entry {last[0] if last else '-'}")  # fmt: skip
+    return {"site_id": site_id, "anchors_voided": voided, "last_anchored_seq": last[0] if last else None,
+            "next": "the site's next sync round anchors its restored audit chain"}  # fmt: skip
 
 
 def _check_runs_through(site_id: str, head: AuditHead, previous: AuditHead, seq: int, digest: str, when: str) -> None:

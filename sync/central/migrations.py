@@ -94,14 +94,17 @@ def c001_center(db: Database) -> None:
 
 @central_migrations()
 def c002_audit_anchors(db: Database) -> None:
-    """Every audit-chain head a clinic had anchored: a later head must still run through the newest one."""
+    """Every audit-chain head a clinic had anchored: a later head must still run through the newest one that is
+    not voided (a site restored from a backup has its anchors voided by the center's IT person, audited)."""
     db.execute(
         """
         CREATE TABLE audit_anchors (
+            id INTEGER PRIMARY KEY,
             site_id TEXT NOT NULL,
             seq INTEGER NOT NULL,
             hash TEXT NOT NULL,
             anchored_at TEXT NOT NULL,
-            PRIMARY KEY (site_id, seq)
-        ) WITHOUT ROWID"""
+            voided_at TEXT
+        )"""
     )
+    db.execute("CREATE INDEX audit_anchors_site ON audit_anchors (site_id, seq)")
