@@ -7,13 +7,13 @@ rewritten at the clinic even with no link; the center tells it at the next round
 from __future__ import annotations
 
 import logging
-import os
 from pathlib import Path
 
 import msgspec
 
 from gateway.storage import audit
 from gateway.storage.database import Database
+from gateway.storage.durable import replace_atomically
 from schemas.audit import AuditAnchor, AuditHead
 from schemas.base import iso, utcnow
 from schemas.config import Config
@@ -54,17 +54,7 @@ def load_anchor(path: Path, center: SiteIdentity | None) -> AuditAnchor | None:
 def save_anchor(path: Path, envelope: SignedEnvelope) -> None:
     """Replace the kept anchor atomically: a crash leaves the old one or the new one, never half of either."""
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.name + ".tmp")
-    with open(tmp, "wb") as f:
-        f.write(msgspec.json.encode(envelope))
-        f.flush()
-        os.fsync(f.fileno())
-    os.replace(tmp, path)
-    folder = os.open(path.parent, os.O_RDONLY)
-    try:
-        os.fsync(folder)
-    finally:
-        os.close(folder)
+    replace_atomically(path, msgspec.json.encode(envelope))
 
 
 def exchange(session, link: Keys, db: Database, keys: SiteKeys, center: SiteIdentity, config: Config) -> AuditAnchor:

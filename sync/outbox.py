@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import hashlib
 import logging
-import os
 import shutil
 import sqlite3
 import threading
@@ -20,6 +19,7 @@ import msgspec
 
 from gateway.storage import audit
 from gateway.storage.database import Database
+from gateway.storage.durable import fsync_dir, write_file
 from schemas.base import iso, utcnow
 from schemas.config import Config
 from schemas.errors import Conflict, NotFound
@@ -147,16 +147,9 @@ class Outbox:
         folder = self.root / bundle_id
         folder.mkdir(parents=True, exist_ok=False)
         for index, data in enumerate(chunks):
-            with open(folder / f"{index:06d}.chunk", "wb") as handle:
-                handle.write(data)
-                handle.flush()
-                os.fsync(handle.fileno())
+            write_file(folder / f"{index:06d}.chunk", data)
         for path in (folder, self.root):
-            fd = os.open(path, os.O_RDONLY)
-            try:
-                os.fsync(fd)
-            finally:
-                os.close(fd)
+            fsync_dir(path)
 
 
 def _content_digest(parts: list[bundle.PartData]) -> str:

@@ -20,6 +20,7 @@ from gateway.backup import archive
 from gateway.backup.crypto import FileKey
 from gateway.backup.restored_config import FOLDERS, render
 from gateway.backup.stream import DecryptingReader, read_header
+from gateway.storage.durable import fsync_dir
 from schemas.backup import BackupHeader, BackupManifest
 from schemas.errors import Conflict, InvalidInput, NotFound
 
@@ -174,8 +175,4 @@ def _move_into_place(staging: Path, into: Path, result: Restored) -> None:
             dest.unlink()
             result.replaced.append(entry.name)
         os.replace(entry, dest)
-    fd = os.open(into, os.O_RDONLY)
-    try:
-        os.fsync(fd)
-    finally:
-        os.close(fd)
+    fsync_dir(into)

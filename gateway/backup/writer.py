@@ -22,6 +22,7 @@ from gateway.backup import snapshot
 from gateway.backup.archive import ArchiveWriter
 from gateway.backup.crypto import FileKey
 from gateway.backup.stream import EncryptingWriter, new_stream
+from gateway.storage.durable import fsync_dir
 from schemas.backup import BackupHeader, BackupKdf, BackupManifest, BackupRecipient
 from schemas.base import iso, utcnow
 from schemas.config import Config
@@ -51,7 +52,7 @@ def write_backup(config: Config, target: Path, encryption: Encryption) -> Backup
                 out.flush()
                 os.fsync(out.fileno())
         os.replace(partial, target)
-        _fsync_dir(target.parent)
+        fsync_dir(target.parent)
     except BaseException:
         partial.unlink(missing_ok=True)
         raise
@@ -138,7 +139,7 @@ def rotate(config: Config, folder: Path, keep: int, encryption: Encryption) -> t
         removed = backups[:-keep]
         for old in removed:
             old.unlink(missing_ok=True)
-        _fsync_dir(folder)
+        fsync_dir(folder)
     return target, manifest, removed
 
 
@@ -149,11 +150,3 @@ def _site_label(config: Config) -> str:
     except (msgspec.DecodeError, AttributeError):
         site = "gateway"
     return "".join(c for c in str(site) if c.isalnum() or c in "-_")[:64] or "gateway"
-
-
-def _fsync_dir(path: Path) -> None:
-    fd = os.open(path, os.O_RDONLY)
-    try:
-        os.fsync(fd)
-    finally:
-        os.close(fd)

@@ -9,8 +9,9 @@ from __future__ import annotations
 
 import hashlib
 import os
-import uuid
 from pathlib import Path
+
+from gateway.storage.durable import fsync_dir, replace_atomically
 
 CHUNK = 1024 * 1024
 
@@ -50,7 +51,7 @@ class MediaStore:
         with open(part, "rb") as f:
             os.fsync(f.fileno())
         os.replace(part, final)
-        _fsync_dir(final.parent)
+        fsync_dir(final.parent)
         return final
 
     def put(self, data: bytes) -> tuple[str, Path]:
@@ -63,17 +64,7 @@ class MediaStore:
         final = self.blob(sha)
         if not final.exists():
             final.parent.mkdir(exist_ok=True)
-            tmp = final.with_name(f"{sha}.{uuid.uuid4().hex}.tmp")
-            try:
-                with open(tmp, "xb") as f:
-                    f.write(data)
-                    f.flush()
-                    os.fsync(f.fileno())
-                os.replace(tmp, final)
-            except BaseException:
-                tmp.unlink(missing_ok=True)
-                raise
-            _fsync_dir(final.parent)
+            replace_atomically(final, data)
         return sha, final
 
 
@@ -83,11 +74,3 @@ def sha256_of(path: Path) -> str:
         while chunk := f.read(CHUNK):
             digest.update(chunk)
     return digest.hexdigest()
-
-
-def _fsync_dir(path: Path) -> None:
-    fd = os.open(path, os.O_RDONLY)
-    try:
-        os.fsync(fd)
-    finally:
-        os.close(fd)

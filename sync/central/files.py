@@ -3,10 +3,9 @@
 from __future__ import annotations
 
 import hashlib
-import os
-import threading
 from pathlib import Path
 
+from gateway.storage.durable import replace_atomically
 from schemas.errors import NotFound
 
 
@@ -25,17 +24,7 @@ class PartStore:
         if hashlib.sha256(data).hexdigest() != sha256:
             raise ValueError("part bytes do not match their sha256")
         final.parent.mkdir(exist_ok=True)
-        tmp = final.with_name(f"{sha256}.{os.getpid()}.{threading.get_ident()}.tmp")
-        with open(tmp, "wb") as handle:
-            handle.write(data)
-            handle.flush()
-            os.fsync(handle.fileno())
-        os.replace(tmp, final)
-        fd = os.open(final.parent, os.O_RDONLY)
-        try:
-            os.fsync(fd)
-        finally:
-            os.close(fd)
+        replace_atomically(final, data)
         return final
 
     def read(self, sha256: str) -> bytes:
