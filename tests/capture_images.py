@@ -54,32 +54,34 @@ def exposed(img: np.ndarray, gain: float) -> np.ndarray:
     return (np.clip(linear, 0, 1) ** (1 / 2.2) * 255).round().astype(np.uint8)
 
 
+def _png_chunk(kind: bytes, body: bytes) -> bytes:
+    return struct.pack(">I", len(body)) + kind + body + struct.pack(">I", zlib.crc32(kind + body))
+
+
+def _png(ihdr: bytes, *chunks: tuple[bytes, bytes]) -> bytes:
+    body = b"".join(_png_chunk(kind, data) for kind, data in chunks)
+    return b"\x89PNG\r\n\x1a\n" + _png_chunk(b"IHDR", ihdr) + body + _png_chunk(b"IEND", b"")
+
+
 def png_bomb(side: int = 40_000) -> bytes:
     """A valid greyscale PNG of side x side black pixels: a few MB that would decode to 1.6 GB."""
     row = b"\x00" * (side + 1)
     comp = zlib.compressobj(1)
     data = b"".join(comp.compress(row) for _ in range(side)) + comp.flush()
 
-    def chunk(kind: bytes, body: bytes) -> bytes:
-        return struct.pack(">I", len(body)) + kind + body + struct.pack(">I", zlib.crc32(kind + body))
-
     ihdr = struct.pack(">IIBBBBB", side, side, 8, 0, 0, 0, 0)
-    return b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", ihdr) + chunk(b"IDAT", data) + chunk(b"IEND", b"")
+    return _png(ihdr, (b"IDAT", data))
 
 
 def png_header_bomb(side: int = 100_000) -> bytes:
     """A few hundred bytes whose header declares side x side RGB pixels, with an EXIF chunk after the pixel data
     (where Pillow's getexif() would decode the whole image to find it)."""
 
-    def chunk(kind: bytes, body: bytes) -> bytes:
-        return struct.pack(">I", len(body)) + kind + body + struct.pack(">I", zlib.crc32(kind + body))
-
     exif = Image.Exif()
     exif[0x0112] = 6
     ihdr = struct.pack(">IIBBBBB", side, side, 8, 2, 0, 0, 0)
     idat = zlib.compress(b"\x00" * 256, 9)
-    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", ihdr) + chunk(b"IDAT", idat) + chunk(b"eXIf", exif.tobytes())
-            + chunk(b"IEND", b""))  # fmt: skip
+    return _png(ihdr, (b"IDAT", idat), (b"eXIf", exif.tobytes()))
 
 
 def rgb_png(width: int, height: int) -> bytes:
@@ -88,11 +90,8 @@ def rgb_png(width: int, height: int) -> bytes:
     comp = zlib.compressobj(1)
     data = b"".join(comp.compress(row) for _ in range(height)) + comp.flush()
 
-    def chunk(kind: bytes, body: bytes) -> bytes:
-        return struct.pack(">I", len(body)) + kind + body + struct.pack(">I", zlib.crc32(kind + body))
-
     ihdr = struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0)
-    return b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", ihdr) + chunk(b"IDAT", data) + chunk(b"IEND", b"")
+    return _png(ihdr, (b"IDAT", data))
 
 
 def video(path, codec: str = "libx264", seconds: float = 2.0, size: tuple[int, int] = (960, 720), fps: int = 30,

@@ -169,6 +169,17 @@ def gateway_process(tmp_path: Path) -> Iterator[GatewayProcess]:
     process.stop()
 
 
+@pytest.fixture
+def sites(tmp_path: Path):
+    """A clinic gateway and a burn center set up (keys, enrolment, accounts), neither started; stopped after."""
+    from tests.sync_sites import Sites
+
+    sites = Sites(tmp_path)
+    sites.set_up()
+    yield sites
+    sites.stop()
+
+
 def open_db(path: str | Path) -> Database:
     return Database(path)
 

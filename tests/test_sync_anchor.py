@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import json
 import sqlite3
-from pathlib import Path
 
 import pytest
 
@@ -15,14 +14,6 @@ from tests.sync_sites import CLINIC, Sites, cli, wait_for
 from tests.test_audit import _cli
 
 pytestmark = pytest.mark.server
-
-
-@pytest.fixture
-def sites(tmp_path: Path):
-    sites = Sites(tmp_path)
-    sites.set_up()
-    yield sites
-    sites.stop()
 
 
 def _anchored(sites: Sites) -> list[tuple[int, str]]:

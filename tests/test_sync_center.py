@@ -13,14 +13,6 @@ from tests.sync_sites import Sites, noise_photo, record_case, wait_for
 pytestmark = pytest.mark.server
 
 
-@pytest.fixture
-def sites(tmp_path: Path):
-    sites = Sites(tmp_path)
-    sites.set_up()
-    yield sites
-    sites.stop()
-
-
 def delivered(client, encounter_id: str, version: int):
     entries = client.get(f"/api/v1/encounters/{encounter_id}/transfers", "transfers")
     return next((e for e in entries if e["version"] == version and e["state"] == "delivered"), None)
