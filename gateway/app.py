@@ -21,6 +21,7 @@ from gateway.controllers.uploads import UploadController
 from gateway.dependencies import Services, provide_services
 from gateway.errors import EXCEPTION_HANDLERS
 from gateway.jobs.supervisor import Workers
+from gateway.openapi import ClosedStructSchemaPlugin
 from gateway.scheduler import start_scheduler
 from gateway.storage.database import Database
 from schemas.config import Config
@@ -62,6 +63,7 @@ def create_app(config: Config, *, start_workers: bool = False) -> Litestar:
         on_startup=[lambda app: _start_background(app, services, workers)],
         on_shutdown=[lambda app: _stop_background(app, workers), lambda app: db.close()],
         request_max_body_size=config.gateway.max_body_bytes,
+        plugins=[ClosedStructSchemaPlugin()],
     )
 
 

@@ -7,10 +7,12 @@ from collections.abc import AsyncIterator
 import anyio
 import msgspec
 from litestar import Controller, Response, get, post
+from litestar.openapi import ResponseSpec
 from litestar.params import FromPath, JSONBody
 from litestar.response import File, ServerSentEvent, ServerSentEventMessage
 
 from gateway.controllers.common import IdPath
+from gateway.controllers.problems import BODY, ONE, problems
 from gateway.dependencies import AuthedRequest, ServicesDep
 from schemas.analysis import AnalysisResult
 from schemas.jobs import FINISHED, AnalysisJob, AnalysisRequest, JobEvent
@@ -29,34 +31,41 @@ class AnalysisController(Controller):
     path = "/api/v1"
     tags = ["analyses"]
 
-    @post("/encounters/{encounter_id:str}/analyses", sync_to_thread=True,
-          summary="Queue a 3D burn analysis of the encounter's pictures (the same request again returns the same job)")  # fmt: skip
+    @post("/encounters/{encounter_id:str}/analyses", sync_to_thread=True, status_code=202,
+          summary="Queue a 3D burn analysis of the encounter's pictures (the same request again returns the same job)",
+          responses={200: ResponseSpec(AnalysisJob, description="The same request was made before: its job"),
+                     **problems(*ONE, *BODY, 409, 422)})  # fmt: skip
     def request_analysis(self, encounter_id: IdPath, data: JSONBody[AnalysisRequest], request: AuthedRequest,
                          services: ServicesDep) -> Response[AnalysisJob]:  # fmt: skip
         job, created = services.analyses.request(request.user, encounter_id, data)
         return Response(job, status_code=202 if created else 200,
                         headers={"Location": f"/api/v1/analyses/{job.id}"})  # fmt: skip
 
-    @get("/encounters/{encounter_id:str}/analyses", sync_to_thread=False, summary="An encounter's analyses")
+    @get("/encounters/{encounter_id:str}/analyses", sync_to_thread=False, summary="An encounter's analyses",
+         responses=problems(*ONE))  # fmt: skip
     def for_encounter(self, encounter_id: IdPath, request: AuthedRequest,
                       services: ServicesDep) -> list[AnalysisJob]:  # fmt: skip
         return services.analyses.for_encounter(request.user, encounter_id)
 
-    @get("/analyses/{job_id:str}", sync_to_thread=False, summary="An analysis: state, stage, progress, queue place")
+    @get("/analyses/{job_id:str}", sync_to_thread=False, summary="An analysis: state, stage, progress, queue place",
+         responses=problems(*ONE))  # fmt: skip
     def read(self, job_id: IdPath, request: AuthedRequest, services: ServicesDep) -> AnalysisJob:
         return services.analyses.get(request.user, job_id)
 
-    @post("/analyses/{job_id:str}/cancel", sync_to_thread=True, status_code=200, summary="Cancel an analysis")
+    @post("/analyses/{job_id:str}/cancel", sync_to_thread=True, status_code=200, summary="Cancel an analysis",
+          responses=problems(*ONE, 409))  # fmt: skip
     def cancel(self, job_id: IdPath, request: AuthedRequest, services: ServicesDep) -> AnalysisJob:
         return services.analyses.cancel(request.user, job_id)
 
     @get("/analyses/{job_id:str}/result", sync_to_thread=False,
-         summary="The measurement (area, perimeter, relief, volume, confidence, provenance) once finished")  # fmt: skip
+         summary="The measurement (area, perimeter, relief, volume, confidence, provenance) once finished",
+         responses=problems(*ONE, 409))  # fmt: skip
     def result(self, job_id: IdPath, request: AuthedRequest, services: ServicesDep) -> AnalysisResult:
         return services.analyses.result(request.user, job_id)
 
     @get("/analyses/{job_id:str}/events", sync_to_thread=False,
-         summary="Progress as server-sent events ('progress' on each change, 'end' when finished)")  # fmt: skip
+         summary="Progress as server-sent events ('progress' on each change, 'end' when finished)",
+         media_type="text/event-stream", responses=problems(*ONE))  # fmt: skip
     def events(self, job_id: IdPath, request: AuthedRequest, services: ServicesDep) -> ServerSentEvent:
         first = services.analyses.get(request.user, job_id)  # 404/403 before the stream starts
         user = request.user
@@ -82,17 +91,20 @@ class AnalysisController(Controller):
         return ServerSentEvent(stream(), headers={"Cache-Control": "no-cache", "X-Accel-Buffering": "no"})
 
     @get("/analyses/{job_id:str}/artifacts", sync_to_thread=True,
-         summary="The files an analysis made: painted mesh (GLB), surface mesh, masks, overlays, result JSON")  # fmt: skip
+         summary="The files an analysis made: painted mesh (GLB), surface mesh, masks, overlays, result JSON",
+         responses=problems(*ONE))  # fmt: skip
     def artifacts(self, job_id: IdPath, request: AuthedRequest, services: ServicesDep) -> list[str]:
         return services.analyses.artifacts(request.user, job_id)
 
-    @get("/analyses/{job_id:str}/artifacts/{name:path}", sync_to_thread=True, summary="Download one of those files")
+    @get("/analyses/{job_id:str}/artifacts/{name:path}", sync_to_thread=True, summary="Download one of those files",
+         responses=problems(*ONE))  # fmt: skip
     def artifact(self, job_id: IdPath, name: FromPath[str], request: AuthedRequest,
                  services: ServicesDep) -> File:  # fmt: skip
         path = services.analyses.artifact(request.user, job_id, name.lstrip("/"))
         return File(path=path, filename=path.name)
 
     @get("/patients/{patient_id:str}/healing", sync_to_thread=True,
-         summary="Healing over time: every measured visit aligned with the first, area change, rate, projection")  # fmt: skip
+         summary="Healing over time: every measured visit aligned with the first, area change, rate, projection",
+         responses=problems(*ONE))  # fmt: skip
     def healing(self, patient_id: IdPath, request: AuthedRequest, services: ServicesDep) -> TrackResult:
         return services.analyses.healing(request.user, patient_id)

@@ -6,6 +6,7 @@ from litestar import Controller, get
 from litestar.response import File
 
 from gateway.controllers.common import IdPath
+from gateway.controllers.problems import ONE, problems
 from gateway.dependencies import AuthedRequest, ServicesDep
 from schemas.capture import Asset, CaptureReadiness
 
@@ -14,11 +15,13 @@ class AssetController(Controller):
     path = "/api/v1"
     tags = ["assets"]
 
-    @get("/assets/{asset_id:str}", sync_to_thread=False, summary="A stored photo, video or frame, with its verdict")
+    @get("/assets/{asset_id:str}", sync_to_thread=False, summary="A stored photo, video or frame, with its verdict",
+         responses=problems(*ONE))  # fmt: skip
     def read(self, asset_id: IdPath, request: AuthedRequest, services: ServicesDep) -> Asset:
         return services.assets.get(request.user, asset_id)
 
-    @get("/assets/{asset_id:str}/file", sync_to_thread=True, summary="The original bytes, exactly as uploaded")
+    @get("/assets/{asset_id:str}/file", sync_to_thread=True, summary="The original bytes, exactly as uploaded",
+         responses=problems(*ONE))  # fmt: skip
     def download(self, asset_id: IdPath, request: AuthedRequest, services: ServicesDep) -> File:
         asset, path = services.assets.file(request.user, asset_id)
         return File(path=path, filename=asset.filename, media_type=asset.media_type.value,
@@ -28,11 +31,14 @@ class AssetController(Controller):
         "/encounters/{encounter_id:str}/assets",
         sync_to_thread=False,
         summary="An encounter's photos, videos and frames",
+        responses=problems(*ONE),
     )
     def for_encounter(self, encounter_id: IdPath, request: AuthedRequest, services: ServicesDep) -> list[Asset]:
         return services.assets.for_encounter(request.user, encounter_id)
 
+    # 422: the encounter was withdrawn (no pictures can be added to it, nor analysed).
     @get("/encounters/{encounter_id:str}/capture-readiness", sync_to_thread=True,
-         summary="Is the capture set ready for 3D analysis, and what is missing")  # fmt: skip
+         summary="Is the capture set ready for 3D analysis, and what is missing",
+         responses=problems(*ONE, 422))  # fmt: skip
     def readiness(self, encounter_id: IdPath, request: AuthedRequest, services: ServicesDep) -> CaptureReadiness:
         return services.assets.readiness(request.user, encounter_id)

@@ -104,6 +104,7 @@ class AdminController(Controller):
     ) -> list[AuditEntry]:  # fmt: skip
         return audit_trail.list_entries(services.db, request.user, after, limit)
 
-    @get("/audit/verify", sync_to_thread=True, summary="Check the audit hash chain; names the first broken entry")
+    @get("/audit/verify", sync_to_thread=True, summary="Check the audit hash chain; names the first broken entry",
+         responses=problems(*SESSION))  # fmt: skip
     def audit_verify(self, request: AuthedRequest, services: ServicesDep) -> AuditVerification:
         return audit_trail.verify(services.db, request.user, services.config)

@@ -8,10 +8,12 @@ body type is a variable, and Litestar must see the real class.
 from typing import Annotated
 
 from litestar import Controller, Response, delete, get, post, put
+from litestar.openapi import ResponseSpec
 from litestar.params import HeaderParameter, JSONBody
 
 from gateway.controllers.common import IdPath, outcome_response, parse_version, record_response
-from gateway.controllers.records import IfMatch, Reason
+from gateway.controllers.problems import ONE, problems
+from gateway.controllers.records import UPDATE, WITHDRAW, IfMatch, Reason
 from gateway.dependencies import AuthedRequest, ServicesDep
 from schemas.burn_chart import BurnChart
 from schemas.errors import Conflict, InvalidInput, VersionMismatch
@@ -33,11 +35,11 @@ WRITABLE_PARTS = {
 
 
 def _readers(kind: RecordKind, label: str):
-    @get("/", sync_to_thread=False, summary=f"Read the {label}")
+    @get("/", sync_to_thread=False, summary=f"Read the {label}", responses=problems(*ONE))
     def read(self, encounter_id: IdPath, request: AuthedRequest, services: ServicesDep) -> Response[Record]:
         return record_response(services.records.get(request.user, kind, encounter_id))
 
-    @get("/history", sync_to_thread=False, summary=f"Every version of the {label}")
+    @get("/history", sync_to_thread=False, summary=f"Every version of the {label}", responses=problems(*ONE))
     def history(self, encounter_id: IdPath, request: AuthedRequest, services: ServicesDep) -> RecordHistory:
         return RecordHistory(
             kind=kind, id=encounter_id, versions=services.records.history(request.user, kind, encounter_id)
@@ -50,7 +52,8 @@ def writable_part_controller(slug: str, kind: RecordKind, struct: type) -> type[
     label = kind.label
     read, history = _readers(kind, label)
 
-    @put("/", sync_to_thread=True, summary=f"Create (If-None-Match: *) or update (If-Match) the {label}")
+    @put("/", sync_to_thread=True, summary=f"Create (If-None-Match: *) or update (If-Match) the {label}",
+         responses={**UPDATE, 201: ResponseSpec(Record, description=f"The {label} was created")})  # fmt: skip
     def write(self, encounter_id: IdPath, data: JSONBody[struct], request: AuthedRequest, services: ServicesDep,
               if_match: IfMatch = None, if_none_match: IfNoneMatch = None) -> Response[Record]:  # fmt: skip
         if if_match is None and if_none_match is not None:
@@ -64,7 +67,7 @@ def writable_part_controller(slug: str, kind: RecordKind, struct: type) -> type[
         version = parse_version(if_match, action=f"updating the {label} (or If-None-Match: * to create it)")
         return outcome_response(services.records.update(request.user, kind, encounter_id, data, version))
 
-    @delete("/", sync_to_thread=True, status_code=200, summary=f"Withdraw the {label}")
+    @delete("/", sync_to_thread=True, status_code=200, summary=f"Withdraw the {label}", responses=WITHDRAW)
     def withdraw(self, encounter_id: IdPath, request: AuthedRequest, services: ServicesDep, reason: Reason,
                  if_match: IfMatch = None) -> Response[Record]:  # fmt: skip
         version = parse_version(if_match, action=f"withdrawing the {label}")
@@ -79,7 +82,8 @@ def assessment_controller() -> type[Controller]:
     read, history = _readers(RecordKind.assessment, "calculator results (%TBSA, fluids, referral)")
 
     @post("/", sync_to_thread=True, status_code=200,
-          summary="Recompute %TBSA, fluids and referral as of now (e.g. after more fluid was given)")  # fmt: skip
+          summary="Recompute %TBSA, fluids and referral as of now (e.g. after more fluid was given)",
+          responses=problems(*ONE, 409))  # fmt: skip
     def recompute(self, encounter_id: IdPath, request: AuthedRequest, services: ServicesDep) -> Response[Record]:
         return record_response(services.records.recompute_assessment(request.user, encounter_id))
 

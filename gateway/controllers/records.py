@@ -5,9 +5,11 @@ from __future__ import annotations
 from typing import Annotated
 
 from litestar import Controller, Response, delete, get, post, put
+from litestar.openapi import ResponseSpec
 from litestar.params import FromQuery, HeaderParameter, JSONBody, QueryParameter
 
 from gateway.controllers.common import IdPath, outcome_response, parse_version, record_response
+from gateway.controllers.problems import BODY, ONE, SESSION, problems
 from gateway.dependencies import AuthedRequest, ServicesDep
 from schemas.patient import Encounter, Patient
 from schemas.records import EncounterRecord, Record, RecordHistory, RecordKind
@@ -18,16 +20,21 @@ MAX_INT64 = 2**63 - 1
 Limit = Annotated[int, QueryParameter(ge=1, le=MAX_INT64, description="Page size (capped by the gateway)")]
 Offset = Annotated[int, QueryParameter(ge=0, le=MAX_INT64)]
 
+REPLAYED = {200: ResponseSpec(Record, description="Already stored with this content (a retry): the stored record")}
+UPDATE = problems(*ONE, *BODY, 412, 422, 428)
+WITHDRAW = problems(*ONE, 412, 422, 428)
+
 
 class PatientController(Controller):
     path = "/api/v1/patients"
     tags = ["patients"]
 
-    @post("/", sync_to_thread=True, summary="Create a patient (the phone makes the id; retrying is safe)")
+    @post("/", sync_to_thread=True, summary="Create a patient (the phone makes the id; retrying is safe)",
+          responses={**REPLAYED, **problems(*BODY, *SESSION, 409, 422)})  # fmt: skip
     def create(self, data: JSONBody[Patient], request: AuthedRequest, services: ServicesDep) -> Response[Record]:
         return outcome_response(services.records.create(request.user, RecordKind.patient, data.id, data))
 
-    @get("/", sync_to_thread=False, summary="List patients")
+    @get("/", sync_to_thread=False, summary="List patients", responses=problems(400, *SESSION))
     def list_(
         self, request: AuthedRequest, services: ServicesDep, include_deleted: FromQuery[bool] = False,
         limit: Limit = 100, offset: Offset = 0,
@@ -35,28 +42,31 @@ class PatientController(Controller):
         return services.records.list_records(request.user, RecordKind.patient, include_deleted=include_deleted,
                                      limit=limit, offset=offset)  # fmt: skip
 
-    @get("/{patient_id:str}", sync_to_thread=False, summary="Read a patient")
+    @get("/{patient_id:str}", sync_to_thread=False, summary="Read a patient", responses=problems(*ONE))
     def read(self, patient_id: IdPath, request: AuthedRequest, services: ServicesDep) -> Response[Record]:
         return record_response(services.records.get(request.user, RecordKind.patient, patient_id))
 
-    @put("/{patient_id:str}", sync_to_thread=True, summary="Update a patient (If-Match required)")
+    @put("/{patient_id:str}", sync_to_thread=True, summary="Update a patient (If-Match required)", responses=UPDATE)
     def update(self, patient_id: IdPath, data: JSONBody[Patient], request: AuthedRequest, services: ServicesDep,
                if_match: IfMatch = None) -> Response[Record]:  # fmt: skip
         version = parse_version(if_match, action="updating a patient")
         return outcome_response(services.records.update(request.user, RecordKind.patient, patient_id, data, version))
 
-    @delete("/{patient_id:str}", sync_to_thread=True, status_code=200, summary="Withdraw a patient (kept in history)")
+    @delete("/{patient_id:str}", sync_to_thread=True, status_code=200, summary="Withdraw a patient (kept in history)",
+            responses=WITHDRAW)  # fmt: skip
     def withdraw(self, patient_id: IdPath, request: AuthedRequest, services: ServicesDep, reason: Reason,
                  if_match: IfMatch = None) -> Response[Record]:  # fmt: skip
         version = parse_version(if_match, action="withdrawing a patient")
         return outcome_response(services.records.delete(request.user, RecordKind.patient, patient_id, version, reason))
 
-    @get("/{patient_id:str}/history", sync_to_thread=False, summary="Every version of a patient")
+    @get("/{patient_id:str}/history", sync_to_thread=False, summary="Every version of a patient",
+         responses=problems(*ONE))  # fmt: skip
     def history(self, patient_id: IdPath, request: AuthedRequest, services: ServicesDep) -> RecordHistory:
         versions = services.records.history(request.user, RecordKind.patient, patient_id)
         return RecordHistory(kind=RecordKind.patient, id=patient_id, versions=versions)
 
-    @get("/{patient_id:str}/encounters", sync_to_thread=False, summary="A patient's encounters")
+    @get("/{patient_id:str}/encounters", sync_to_thread=False, summary="A patient's encounters",
+         responses=problems(*ONE))  # fmt: skip
     def encounters(self, patient_id: IdPath, request: AuthedRequest, services: ServicesDep,
                    include_deleted: FromQuery[bool] = False) -> list[Record]:  # fmt: skip
         services.records.get(request.user, RecordKind.patient, patient_id)
@@ -68,15 +78,17 @@ class EncounterController(Controller):
     path = "/api/v1/encounters"
     tags = ["encounters"]
 
-    @post("/", sync_to_thread=True, summary="Open an encounter for a patient")
+    @post("/", sync_to_thread=True, summary="Open an encounter for a patient",
+          responses={**REPLAYED, **problems(*BODY, *SESSION, 404, 409, 422)})  # fmt: skip
     def create(self, data: JSONBody[Encounter], request: AuthedRequest, services: ServicesDep) -> Response[Record]:
         return outcome_response(services.records.create(request.user, RecordKind.encounter, data.id, data))
 
-    @get("/{encounter_id:str}", sync_to_thread=False, summary="Read an encounter")
+    @get("/{encounter_id:str}", sync_to_thread=False, summary="Read an encounter", responses=problems(*ONE))
     def read(self, encounter_id: IdPath, request: AuthedRequest, services: ServicesDep) -> Response[Record]:
         return record_response(services.records.get(request.user, RecordKind.encounter, encounter_id))
 
-    @put("/{encounter_id:str}", sync_to_thread=True, summary="Update an encounter (If-Match required)")
+    @put("/{encounter_id:str}", sync_to_thread=True, summary="Update an encounter (If-Match required)",
+         responses=UPDATE)  # fmt: skip
     def update(self, encounter_id: IdPath, data: JSONBody[Encounter], request: AuthedRequest, services: ServicesDep,
                if_match: IfMatch = None) -> Response[Record]:  # fmt: skip
         version = parse_version(if_match, action="updating an encounter")
@@ -84,7 +96,8 @@ class EncounterController(Controller):
             services.records.update(request.user, RecordKind.encounter, encounter_id, data, version)
         )
 
-    @delete("/{encounter_id:str}", sync_to_thread=True, status_code=200, summary="Withdraw an encounter")
+    @delete("/{encounter_id:str}", sync_to_thread=True, status_code=200, summary="Withdraw an encounter",
+            responses=WITHDRAW)  # fmt: skip
     def withdraw(self, encounter_id: IdPath, request: AuthedRequest, services: ServicesDep, reason: Reason,
                  if_match: IfMatch = None) -> Response[Record]:  # fmt: skip
         version = parse_version(if_match, action="withdrawing an encounter")
@@ -92,11 +105,13 @@ class EncounterController(Controller):
             services.records.delete(request.user, RecordKind.encounter, encounter_id, version, reason)
         )
 
-    @get("/{encounter_id:str}/history", sync_to_thread=False, summary="Every version of an encounter")
+    @get("/{encounter_id:str}/history", sync_to_thread=False, summary="Every version of an encounter",
+         responses=problems(*ONE))  # fmt: skip
     def history(self, encounter_id: IdPath, request: AuthedRequest, services: ServicesDep) -> RecordHistory:
         versions = services.records.history(request.user, RecordKind.encounter, encounter_id)
         return RecordHistory(kind=RecordKind.encounter, id=encounter_id, versions=versions)
 
-    @get("/{encounter_id:str}/record", sync_to_thread=False, summary="The encounter with every part and its assessment")
+    @get("/{encounter_id:str}/record", sync_to_thread=False, summary="The encounter with every part and its assessment",
+         responses=problems(*ONE))  # fmt: skip
     def full_record(self, encounter_id: IdPath, request: AuthedRequest, services: ServicesDep) -> EncounterRecord:
         return services.records.encounter_record(request.user, encounter_id)

@@ -7,6 +7,7 @@ from typing import Annotated
 from litestar import Controller, get, post
 from litestar.params import JSONBody, QueryParameter
 
+from gateway.controllers.problems import BODY, SESSION, problems
 from gateway.dependencies import AuthedRequest, ServicesDep
 from schemas.sync import ChangesPage, PushRequest, PushResponse
 
@@ -15,7 +16,8 @@ class SyncController(Controller):
     path = "/api/v1/sync"
     tags = ["sync"]
 
-    @get("/changes", sync_to_thread=False, summary="Record versions after a cursor, oldest first")
+    @get("/changes", sync_to_thread=False, summary="Record versions after a cursor, oldest first",
+         responses=problems(400, *SESSION))  # fmt: skip
     def changes(
         self, request: AuthedRequest, services: ServicesDep,
         since: Annotated[int, QueryParameter(ge=0, le=2**63 - 1, description="next_cursor of the previous page")] = 0,
@@ -23,6 +25,7 @@ class SyncController(Controller):
     ) -> ChangesPage:  # fmt: skip
         return services.phone_sync.changes(request.user, since, limit)
 
-    @post("/push", sync_to_thread=True, status_code=200, summary="Apply queued mutations; safe to retry")
+    @post("/push", sync_to_thread=True, status_code=200, summary="Apply queued mutations; safe to retry",
+          responses=problems(*BODY, *SESSION))  # fmt: skip
     def push(self, data: JSONBody[PushRequest], request: AuthedRequest, services: ServicesDep) -> PushResponse:
         return services.phone_sync.push(request.user, data.mutations)

@@ -24,6 +24,7 @@ from litestar.exceptions import InternalServerException
 from litestar.params import HeaderParameter
 
 from gateway.controllers.common import IdPath
+from gateway.controllers.problems import ONE, problems
 from gateway.dependencies import AuthedRequest, ServicesDep
 from gateway.scheduler import run_frames_now
 from gateway.services.uploads import UploadState
@@ -96,7 +97,8 @@ class UploadController(Controller):
             "Tus-Checksum-Algorithm": ",".join(CHECKSUMS),
         })  # fmt: skip
 
-    @post("/", sync_to_thread=True, summary="Start an upload (Upload-Length, Upload-Metadata with encounter_id)")
+    @post("/", sync_to_thread=True, summary="Start an upload (Upload-Length, Upload-Metadata with encounter_id)",
+          responses=problems(*ONE, 412, 413, 422, 429, 507))  # fmt: skip
     def create(
         self, request: AuthedRequest, services: ServicesDep,
         upload_length: Annotated[int, HeaderParameter(name="Upload-Length", ge=0)],
@@ -107,14 +109,16 @@ class UploadController(Controller):
         location = f"{str(request.base_url).rstrip('/')}{self.path}/{state.id}"
         return Response(None, status_code=201, headers={**_headers(state), "Location": location})
 
-    @head("/{upload_id:str}", sync_to_thread=True, summary="How many bytes the gateway holds")
+    @head("/{upload_id:str}", sync_to_thread=True, summary="How many bytes the gateway holds",
+          responses=problems(*ONE, 410, 412))  # fmt: skip
     def offset(self, upload_id: IdPath, request: AuthedRequest, services: ServicesDep) -> Response[None]:
         _require_tus(request)
         state = services.uploads.status(request.user, upload_id)
         return Response(None, status_code=200, headers={**_headers(state), "Upload-Length": str(state.length)})
 
     @route("/{upload_id:str}", http_method=[HttpMethod.PATCH], status_code=204, request_max_body_size=None,
-           summary="Send bytes from Upload-Offset (application/offset+octet-stream)")  # fmt: skip
+           summary="Send bytes from Upload-Offset (application/offset+octet-stream)",
+           responses=problems(*ONE, 409, 410, 412, 413, 415, 422, 460))  # fmt: skip
     async def append(
         self, upload_id: IdPath, request: AuthedRequest, services: ServicesDep,
         upload_offset: Annotated[int, HeaderParameter(name="Upload-Offset", ge=0)],
@@ -138,13 +142,15 @@ class UploadController(Controller):
             return Response(None, status_code=204, headers={"Tus-Resumable": TUS_VERSION})
         raise BadRequest("X-HTTP-Method-Override must be PATCH (with Upload-Offset) or DELETE")
 
-    @delete("/{upload_id:str}", sync_to_thread=True, status_code=204, summary="Abandon an upload (tus termination)")
+    @delete("/{upload_id:str}", sync_to_thread=True, status_code=204, summary="Abandon an upload (tus termination)",
+            responses=problems(*ONE, 409, 410, 412))  # fmt: skip
     def terminate(self, upload_id: IdPath, request: AuthedRequest, services: ServicesDep) -> Response[None]:
         _require_tus(request)
         services.uploads.terminate(request.user, upload_id)
         return Response(None, status_code=204, headers={"Tus-Resumable": TUS_VERSION})
 
-    @get("/{upload_id:str}", sync_to_thread=True, summary="The upload, and once complete its asset and quality verdict")
+    @get("/{upload_id:str}", sync_to_thread=True, summary="The upload, and once complete its asset and quality verdict",
+         responses=problems(*ONE, 410))  # fmt: skip
     def read(self, upload_id: IdPath, request: AuthedRequest, services: ServicesDep) -> UploadStatus:
         state = services.uploads.status(request.user, upload_id)
         asset = services.assets.get(request.user, state.asset_id) if state.asset_id else None
