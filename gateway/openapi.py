@@ -3,9 +3,8 @@
 Three things Litestar's generator leaves out or gets wrong for our msgspec Structs:
 - every message refuses unknown fields (schemas/base.py Message): the document says so with
   `additionalProperties: false`, else a client, or a generator of clients, believes extra fields are fine;
-- patterns are written for Python (msgspec searches them): `\\A...\\Z` anchors a whole string there. JSON Schema
-  patterns are ECMA-262, where `\\A` is an error in unicode mode and `^...$` already anchors the whole string, so the
-  document carries that form (path parameters say so with `schema_extra`, see gateway/controllers/common.py);
+- patterns are written for Python; the document carries their ECMA-262 form, as JSON Schema requires
+  (schemas/export.py ecma_pattern; path parameters say so with `schema_extra`, gateway/controllers/common.py);
 - a bound of zero on an optional number (`ge=0`, `gt=0`: weights, durations, flows) was dropped, Litestar testing
   the bound for truth, so the document allowed negative weights the gateway refuses.
 """
@@ -18,18 +17,11 @@ import msgspec
 from litestar._openapi.schema_generation.plugins.struct import StructSchemaPlugin
 from litestar.openapi.spec import Schema
 
+from schemas.export import ecma_pattern
+
 if TYPE_CHECKING:
     from litestar._openapi.schema_generation import SchemaCreator
     from litestar.typing import FieldDefinition
-
-
-def ecma_pattern(pattern: str) -> str:
-    """A Python pattern anchored with \\A and \\Z as the ECMA-262 pattern that matches the same strings."""
-    if pattern.startswith(r"\A"):
-        pattern = "^" + pattern[2:]
-    if pattern.endswith(r"\Z") and not pattern.endswith(r"\\Z"):
-        pattern = pattern[:-2] + "$"
-    return pattern
 
 
 def _publish_patterns(schema: object) -> None:

@@ -42,6 +42,8 @@ def test_schemas_export_writes_a_json_schema_per_message(tmp_path):
     props = patient["$defs"]["Patient"]["properties"]
     assert props["weight_kg"]["anyOf"][0]["exclusiveMinimum"] == 0
     assert patient["$defs"]["Patient"]["additionalProperties"] is False
+    # JSON Schema patterns are ECMA-262, where \A is an error in unicode mode and ^...$ anchors the whole string.
+    assert props["id"]["pattern"].startswith("^") and props["id"]["pattern"].endswith("}$")
     assert len(names) == len(public_messages())
 
 

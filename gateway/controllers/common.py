@@ -8,10 +8,10 @@ from typing import Annotated
 from litestar import Response
 from litestar.params import PathParameter
 
-from gateway.openapi import ecma_pattern
 from gateway.services.records import WriteOutcome
 from schemas.base import ID_PATTERN
 from schemas.errors import InvalidInput, PreconditionRequired
+from schemas.export import ecma_pattern
 from schemas.records import Record
 from schemas.transfer import SITE_ID_PATTERN
 
