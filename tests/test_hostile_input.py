@@ -75,6 +75,7 @@ def test_transfers_of_an_unknown_or_malformed_encounter_are_404_and_400_before_a
     r = http.post(f"/api/v1/encounters/{uuid7()}/transfers")
     assert r.status_code == 404 and "no encounter" in r.json()["detail"]
     assert http.post("/api/v1/encounters/not-a-uuid/transfers").status_code == 400
+    assert http.get(f"/api/v1/encounters/{uuid7()}/assets").status_code == 404
     patient = patient_body()
     http.post("/api/v1/patients", json=patient)
     encounter = encounter_body(patient["id"])

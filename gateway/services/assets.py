@@ -16,6 +16,7 @@ from gateway.services.validation import require_live_encounter
 from gateway.storage import audit
 from gateway.storage.blobs import MediaStore, sha256_of
 from gateway.storage.database import Database
+from gateway.storage.records import get_head
 from processing.capture.media import check_photo, check_video, sniff
 from processing.capture.quality import gate_bytes
 from processing.capture.readiness import View
@@ -103,12 +104,10 @@ class AssetService:
 
     def for_encounter(self, principal: Principal, encounter_id: str) -> list[Asset]:
         require_read(principal, RecordKind.encounter)
-        rows = (
-            self.db.connection()
-            .execute("SELECT * FROM assets WHERE encounter_id = ? ORDER BY created_at, id", (encounter_id,))
-            .fetchall()
-        )
-        return [_asset(r) for r in rows]
+        conn = self.db.connection()
+        get_head(conn, RecordKind.encounter, encounter_id)  # an unknown encounter is a 404, not an empty list
+        rows = conn.execute("SELECT * FROM assets WHERE encounter_id = ? ORDER BY created_at, id", (encounter_id,))
+        return [_asset(r) for r in rows.fetchall()]
 
     def readiness(self, principal: Principal, encounter_id: str) -> CaptureReadiness:
         """Whether the encounter's photos and frames are enough for 3D analysis."""
