@@ -4,7 +4,10 @@ from __future__ import annotations
 
 import argparse
 import logging
+import os
+import sys
 from collections.abc import Callable
+from contextlib import contextmanager
 from pathlib import Path
 
 import msgspec
@@ -15,6 +18,21 @@ from schemas.errors import InvalidInput, NotFound
 log = logging.getLogger("burnedge")
 
 IMAGE_SUFFIXES = {".jpg", ".jpeg", ".png", ".heic", ".heif"}
+
+
+@contextmanager
+def native_stdout_to_stderr():
+    """Native libraries (Open3D's warnings, COLMAP) write to file descriptor 1; while they work, that goes to stderr,
+    so what the command prints on stdout afterwards is its JSON answer alone."""
+    sys.stdout.flush()
+    saved = os.dup(1)
+    try:
+        os.dup2(2, 1)
+        yield
+    finally:
+        sys.stdout.flush()
+        os.dup2(saved, 1)
+        os.close(saved)
 
 
 def read_ruler(path: str | None):
@@ -93,7 +111,8 @@ def cmd_analyze(args: argparse.Namespace, config: Config) -> int:
         raise NotFound(f"--masks {args.masks} is not a folder")
     out, source = prepare_out(args.source, args.out, args.fresh)
     patient = Patient(hours_since_injury=args.hours_since_injury, height_cm=args.height_cm, weight_kg=args.weight_kg)
-    result = run(config, source, out, masks=masks, ruler=ruler, patient=patient, gate=not args.no_gate)
+    with native_stdout_to_stderr():
+        result = run(config, source, out, masks=masks, ruler=ruler, patient=patient, gate=not args.no_gate)
     print(msgspec.json.format(msgspec.json.encode(result), indent=2).decode())
     if result.status is AnalysisStatus.failed:
         log.error("analysis failed: %s", result.reason)
@@ -143,14 +162,15 @@ def cmd_track(args: argparse.Namespace, config: Config) -> int:
             raise InvalidInput(f"--fresh: {args.out} does not look like a track folder; not deleting it")
         shutil.rmtree(out)
     sessions = []
-    for i, (day, (images, masks)) in enumerate(zip(days, visits, strict=True)):
-        folder = out / "sessions" / f"{i:02d}_day{day:g}"
-        log.info("visit %d of %d (day %g): analysing %s", i + 1, len(visits), day, images)
-        result = analyze(config, images, folder, masks=masks, patient=Patient(hours_since_injury=day * 24))
-        if result.status.value == "failed":
-            log.warning("visit %d (day %g) failed: %s", i + 1, day, result.reason)
-        sessions.append(track.SessionAnalysis(day=day, analysis_dir=folder, label=Path(args.sessions[i]).name))
-    path = track.run(config.tracking, sessions, out)
+    with native_stdout_to_stderr():
+        for i, (day, (images, masks)) in enumerate(zip(days, visits, strict=True)):
+            folder = out / "sessions" / f"{i:02d}_day{day:g}"
+            log.info("visit %d of %d (day %g): analysing %s", i + 1, len(visits), day, images)
+            result = analyze(config, images, folder, masks=masks, patient=Patient(hours_since_injury=day * 24))
+            if result.status.value == "failed":
+                log.warning("visit %d (day %g) failed: %s", i + 1, day, result.reason)
+            sessions.append(track.SessionAnalysis(day=day, analysis_dir=folder, label=Path(args.sessions[i]).name))
+        path = track.run(config.tracking, sessions, out)
     print(path.read_text())
     if not any(s.baseline for s in msgspec.json.decode(path.read_bytes(), type=TrackResult).sessions):
         log.error("no visit could be measured in real units: nothing to track")
