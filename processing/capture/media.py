@@ -53,7 +53,9 @@ def check_photo(data: bytes, media_type: MediaType, max_pixels: int) -> CaptureM
             if media_type is MediaType.png:
                 im.verify()  # every chunk's CRC, without decoding
             else:
-                im.draft("L", (max(1, header.width // 8), max(1, header.height // 8)))
+                if media_type is MediaType.jpeg:  # libjpeg decodes every scan at 1/8 scale
+                    im.draft("L", (max(1, header.width // 8), max(1, header.height // 8)))
+                # Not for HEIC: pillow-heif's draft decodes an embedded thumbnail instead, proving nothing of the image
                 im.load()
             exif = im.getexif() if media_type is not MediaType.png else None
     except (UnidentifiedImageError, OSError, ValueError, SyntaxError) as exc:
