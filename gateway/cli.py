@@ -11,7 +11,7 @@ from pathlib import Path
 
 import msgspec
 
-from gateway import cli_analysis, cli_backup, cli_sync
+from gateway import __version__, cli_analysis, cli_backup, cli_sync
 from schemas.config import Config, load_config
 from schemas.errors import AuthenticationFailed, BurnedgeError, Conflict, InvalidInput, NotFound
 
@@ -220,6 +220,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--config", help="TOML configuration file (see docs/configuration.md)")
     parser.add_argument("--db", help="SQLite database file (overrides the configuration)")
     parser.add_argument("-v", "--verbose", action="store_true", help="log debug messages")
+    parser.add_argument("--version", action="version", version=f"burnedge {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
     serve = sub.add_parser("serve", help="run the gateway HTTP API")

@@ -7,9 +7,20 @@ schemas because every other package already depends on this one.
 
 from __future__ import annotations
 
+import re
 from typing import Any
 
 from schemas.problem import FieldProblem
+
+_OBJECT_REPR = re.compile(r"\s*<[^<>]*\bat 0x[0-9a-fA-F]+>")
+_ERRNO = re.compile(r"\[Errno -?\d+\]\s*")
+
+
+def plain(exc: BaseException) -> str:
+    """A library's message about a file, fit for a person: no object reprs ("<_io.BytesIO object at 0x7f...>"),
+    no "[Errno 1094995529]" codes. Callers say which file and what was being done."""
+    text = _ERRNO.sub("", _OBJECT_REPR.sub("", str(exc))).strip(" :;,")
+    return text or type(exc).__name__
 
 
 class BurnedgeError(Exception):

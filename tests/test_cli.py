@@ -84,3 +84,16 @@ def test_demo_seeds_a_patient_with_calculated_results_and_is_idempotent(tmp_path
     assert second.returncode == 0, second.stderr
     assert first.stdout.splitlines()[1] == second.stdout.splitlines()[1]
     assert db.with_suffix(".credentials").stat().st_mode & 0o077 == 0
+
+
+def test_version_and_every_exit_code_are_in_the_readme():
+    from gateway import __version__
+    from gateway.cli import EXIT_CODES
+
+    r = subprocess.run([sys.executable, "-m", "gateway.cli", "--version"], capture_output=True, text=True, cwd=REPO)
+    assert r.returncode == 0 and r.stdout.strip() == f"burnedge {__version__}"
+    readme = (REPO / "README.md").read_text()
+    codes = readme[readme.index("Exit codes:") :].split("\n\n")[0]
+    for code in {0, 6, 7, *(c for _, c in EXIT_CODES)}:
+        assert f"{code} " in codes, f"exit code {code} is not in the README's list"
+    assert "`--version`" in readme

@@ -23,7 +23,7 @@ import numpy as np
 from processing.capture.quality import gate_pixels
 from schemas.capture import QualityVerdict
 from schemas.config import FramesConfig, QualityGateConfig
-from schemas.errors import InvalidInput
+from schemas.errors import InvalidInput, plain
 
 
 @dataclass
@@ -120,7 +120,7 @@ def _pick_sharpest(path: Path, config: FramesConfig, finish) -> int:
             if best is not None:
                 finish(best)
     except av.FFmpegError as exc:
-        raise InvalidInput(f"the video could not be decoded: {exc}") from exc
+        raise InvalidInput(f"the video could not be decoded: {plain(exc)}") from exc
     if decoded == 0:
         raise InvalidInput("the video has no decodable frames")
     return decoded

@@ -22,7 +22,7 @@ import numpy as np
 from PIL import Image, ImageOps, UnidentifiedImageError
 from pillow_heif import register_heif_opener
 
-from schemas.errors import InvalidInput
+from schemas.errors import InvalidInput, plain
 
 register_heif_opener()
 # The gate enforces its own, documented pixel limit before decoding; Pillow's warning would be noise.
@@ -62,7 +62,7 @@ def read_header(data: bytes, max_pixels: int) -> ImageHeader:
                 )
             header = ImageHeader(fmt, width, height, _orientation(im.info.get("exif")))
     except (UnidentifiedImageError, OSError, ValueError, SyntaxError) as exc:
-        raise InvalidInput(f"not a readable image: {exc}") from exc
+        raise InvalidInput(f"not a photo this gateway can read (JPEG, PNG or HEIC): {plain(exc)}") from exc
     return header
 
 
@@ -105,7 +105,7 @@ def _decode_gray(data: bytes, header: ImageHeader, long_side: int) -> np.ndarray
                 im.draft("L", (max(1, int(header.width * factor)), max(1, int(header.height * factor))))
             gray = np.asarray(ImageOps.grayscale(im))
     except (OSError, ValueError, SyntaxError) as exc:
-        raise InvalidInput(f"the image data is truncated or corrupt: {exc}") from exc
+        raise InvalidInput(f"the image data is truncated or corrupt: {plain(exc)}") from exc
     if gray.size == 0:
         raise InvalidInput("the image has no pixels")
     return gray

@@ -11,7 +11,7 @@ from PIL import ExifTags, Image, UnidentifiedImageError
 from processing.capture.images import read_header
 from schemas.capture import CaptureMetadata, MediaType
 from schemas.config import QualityGateConfig, UploadConfig
-from schemas.errors import InvalidInput, UnsupportedMedia
+from schemas.errors import InvalidInput, UnsupportedMedia, plain
 
 HEIF_BRANDS = {b"heic", b"heix", b"hevc", b"hevx", b"heim", b"heis", b"hevm", b"hevs", b"mif1", b"msf1"}
 QUICKTIME_BRANDS = {b"qt  "}
@@ -59,7 +59,7 @@ def check_photo(data: bytes, media_type: MediaType, max_pixels: int) -> CaptureM
                 im.load()
             exif = im.getexif() if media_type is not MediaType.png else None
     except (UnidentifiedImageError, OSError, ValueError, SyntaxError) as exc:
-        raise InvalidInput(f"the photo is truncated or corrupt: {exc}") from exc
+        raise InvalidInput(f"the photo is truncated or corrupt: {plain(exc)}") from exc
     return _exif_metadata(exif, header.width, header.height, header.orientation)
 
 
@@ -127,7 +127,7 @@ def check_video(
                 orientation=_rotation(first),
             )  # fmt: skip
     except av.FFmpegError as exc:
-        raise InvalidInput(f"the video is truncated or corrupt: {exc}") from exc
+        raise InvalidInput(f"the video is truncated, corrupt or not a video: {plain(exc)}") from exc
     return meta
 
 

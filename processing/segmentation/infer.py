@@ -13,7 +13,7 @@ import cv2
 import numpy as np
 import onnxruntime as ort
 
-from schemas.errors import InvalidInput
+from schemas.errors import InvalidInput, plain
 
 SHIPPED_MODEL = Path(__file__).parent / "models" / "burnseg.onnx"
 
@@ -28,7 +28,7 @@ def read_rgb(path: Path) -> np.ndarray:
         with Image.open(path) as image:
             return np.asarray(image.convert("RGB"))
     except (OSError, UnidentifiedImageError) as exc:
-        raise InvalidInput(f"{path.name} could not be decoded as a photo ({exc})") from exc
+        raise InvalidInput(f"{path.name} could not be decoded as a photo ({plain(exc)})") from exc
 
 
 @dataclass(frozen=True)
