@@ -215,11 +215,27 @@ def cmd_phantom(args: argparse.Namespace) -> int:
     return 0
 
 
+def _global_options(parser: argparse.ArgumentParser, default) -> None:
+    parser.add_argument("--config", default=default, help="TOML configuration file (see docs/configuration.md)")
+    parser.add_argument("--db", default=default, help="SQLite database file (overrides the configuration)")
+    parser.add_argument("-v", "--verbose", action="store_true", default=default, help="log debug messages")
+
+
+def _global_options_after_commands(parser: argparse.ArgumentParser) -> None:
+    """`burnedge serve --db X` as well as `burnedge --db X serve`: each command accepts the global options too. Their
+    default there is SUPPRESS, so an option given before the command is not reset by its absence after it."""
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for command in action.choices.values():
+                if any(isinstance(a, argparse._SubParsersAction) for a in command._actions):
+                    _global_options_after_commands(command)
+                else:
+                    _global_options(command, argparse.SUPPRESS)
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="burnedge", description="Objective burn assessment at the clinic edge.")
-    parser.add_argument("--config", help="TOML configuration file (see docs/configuration.md)")
-    parser.add_argument("--db", help="SQLite database file (overrides the configuration)")
-    parser.add_argument("-v", "--verbose", action="store_true", help="log debug messages")
+    _global_options(parser, None)
     parser.add_argument("--version", action="version", version=f"burnedge {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
@@ -301,6 +317,7 @@ def build_parser() -> argparse.ArgumentParser:
     export = schemas.add_parser("export", help="write JSON Schema for every public message")
     export.add_argument("dir", help="output folder")
     export.set_defaults(func=cmd_schemas_export)
+    _global_options_after_commands(parser)
     return parser
 
 

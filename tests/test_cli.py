@@ -97,3 +97,15 @@ def test_version_and_every_exit_code_are_in_the_readme():
     for code in {0, 6, 7, *(c for _, c in EXIT_CODES)}:
         assert f"{code} " in codes, f"exit code {code} is not in the README's list"
     assert "`--version`" in readme
+
+
+def test_global_options_work_before_and_after_the_command(tmp_path):
+    missing = str(tmp_path / "nope.sqlite3")
+    for args in (["--db", missing, "audit", "verify"], ["audit", "verify", "--db", missing]):
+        r = subprocess.run([sys.executable, "-m", "gateway.cli", *args], capture_output=True, text=True, cwd=REPO)
+        assert r.returncode == 3 and f"no database at {missing}" in r.stderr, (args, r.stderr)
+    config = tmp_path / "burnedge.toml"
+    config.write_text(f'[gateway]\ndatabase = "{tmp_path / "from-config.sqlite3"}"\n')
+    parsed = build_parser().parse_args(["--config", str(config), "users", "add", "--username", "amani", "--role",
+                                        "nurse", "-v"])  # fmt: skip
+    assert (parsed.config, parsed.db, parsed.verbose) == (str(config), None, True)
