@@ -240,14 +240,15 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
     serve = sub.add_parser("serve", help="run the gateway HTTP API")
-    serve.add_argument("--host", help="address to listen on (0.0.0.0 for the clinic network)")
-    serve.add_argument("--port", type=int, help="TCP port")
+    serve.add_argument("--host", help="address to listen on (default [gateway] host, 127.0.0.1; 0.0.0.0 for the "
+                       "clinic network)")  # fmt: skip
+    serve.add_argument("--port", type=int, help="TCP port (default [gateway] port, 8080)")
     serve.set_defaults(func=cmd_serve)
 
     demo = sub.add_parser("demo", help="the whole system on this machine: demo patients, a 4-visit burn series "
                                        "uploaded, analysed and aligned through the real gateway, then serve it")  # fmt: skip
     demo.add_argument("--host", help="address to listen on")
-    demo.add_argument("--port", type=int, help="TCP port")
+    demo.add_argument("--port", type=int, help="TCP port (default 8080)")
     demo.add_argument("--exit", "--no-serve", dest="exit", action="store_true",
                       help="exit after the summary instead of leaving the gateway running")  # fmt: skip
     demo.add_argument("--no-series", action="store_true", help="seed the records only; no phantom series or analyses")
@@ -302,7 +303,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     users = sub.add_parser("users", help="manage user accounts").add_subparsers(dest="users_cmd", required=True)
     add = users.add_parser("add", help="create an account (the first administrator, say)")
-    add.add_argument("--username", required=True)
+    add.add_argument("--username", required=True, help="lower-case letters, digits . _ -, e.g. amani.k")
     add.add_argument("--role", required=True, choices=["clinician", "nurse", "admin", "consultant"])
     add.add_argument("--name", help="display name")
     add.add_argument("--password-stdin", action="store_true", help="read the password from standard input")
