@@ -38,16 +38,25 @@ def load_anchor(path: Path, center: SiteIdentity | None) -> AuditAnchor | None:
         return None
     try:
         envelope = msgspec.json.decode(path.read_bytes(), type=SignedEnvelope)
-        anchor = msgspec.msgpack.decode(envelope.body, type=AuditAnchor)
+        if center is None:
+            return msgspec.msgpack.decode(envelope.body, type=AuditAnchor)
     except (OSError, msgspec.DecodeError, msgspec.ValidationError) as exc:
         raise InvalidInput(f"the audit anchor {path} is unreadable ({exc}): it was damaged or replaced") from exc
-    if center is not None:
-        try:
-            verify_envelope(envelope, center)
-        except Exception as exc:  # nacl's BadSignatureError, or a malformed signature
-            raise InvalidInput(f"the audit anchor {path} is not signed by burn center {center.site_id}") from exc
-        if envelope.kind != "audit-anchor" or envelope.signer != center.site_id or anchor.center_id != center.site_id:
-            raise InvalidInput(f"the audit anchor {path} is a {envelope.kind!r} from {envelope.signer}")
+    try:
+        return open_anchor(envelope, center)
+    except ValueError as exc:
+        raise InvalidInput(f"the audit anchor {path} {exc}") from exc
+
+
+def open_anchor(envelope: SignedEnvelope, center: SiteIdentity) -> AuditAnchor:
+    """The anchor in an envelope `center` signed as one; ValueError saying what it is instead."""
+    try:
+        verify_envelope(envelope, center)
+        anchor = msgspec.msgpack.decode(envelope.body, type=AuditAnchor)
+    except Exception as exc:  # nacl's BadSignatureError, a malformed signature, or a body that is no anchor
+        raise ValueError(f"is not signed by burn center {center.site_id}") from exc
+    if envelope.kind != "audit-anchor" or envelope.signer != center.site_id or anchor.center_id != center.site_id:
+        raise ValueError(f"is a {envelope.kind!r} from {envelope.signer}, not an audit anchor from {center.site_id}")
     return anchor
 
 
@@ -94,10 +103,9 @@ def _entry(conn, seq: int) -> AuditHead:
 
 def _checked(envelope: SignedEnvelope, center: SiteIdentity, keys: SiteKeys, head: AuditHead) -> AuditAnchor:
     try:
-        verify_envelope(envelope, center)
-        anchor = msgspec.msgpack.decode(envelope.body, type=AuditAnchor)
-    except Exception as exc:
-        raise TransferRejected(f"the audit anchor is not signed by {center.site_id}", code="bad-anchor") from exc
-    if envelope.kind != "audit-anchor" or anchor.site_id != keys.site_id or anchor.head != head:
+        anchor = open_anchor(envelope, center)
+    except ValueError as exc:
+        raise TransferRejected(f"the center's answer {exc}", code="bad-anchor") from exc
+    if anchor.site_id != keys.site_id or anchor.head != head:
         raise TransferRejected("the center anchored something other than this chain's head", code="bad-anchor")
     return anchor

@@ -175,7 +175,8 @@ def _head_problem(conn: sqlite3.Connection, newest: dict[tuple[str, str], tuple[
                          f"as its newest: the record was {change} version {row['version']}")  # fmt: skip
         if bool(row["head_deleted"]) != bool(row["deleted"]):
             return seq, f"{what}: its withdrawn flag does not match its newest version"
-    for (kind, record_id), (version, seq) in unseen.items():
+    if unseen:
+        (kind, record_id), (version, seq) = next(iter(unseen.items()))
         return seq, f"{kind} {record_id} version {version}, recorded by entry {seq}, is no longer served: head removed"
     return None
 

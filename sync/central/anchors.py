@@ -10,7 +10,6 @@ the center's IT person accepts a restore from a backup (`burnedge peers accept-r
 
 from __future__ import annotations
 
-import logging
 from collections.abc import Callable
 
 import msgspec
@@ -24,7 +23,6 @@ from schemas.transfer import AnchorReply, AnchorRequest, SignedEnvelope, SiteIde
 from sync import peers
 from sync.keys import SiteKeys
 
-log = logging.getLogger("burnedge.central")
 Verifier = Callable[[str, bytes, str], tuple[SignedEnvelope, SiteIdentity]]
 
 
