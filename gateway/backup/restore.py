@@ -20,6 +20,7 @@ from gateway.backup import archive
 from gateway.backup.crypto import FileKey
 from gateway.backup.restored_config import FOLDERS, render
 from gateway.backup.stream import DecryptingReader, read_header
+from gateway.storage import audit
 from gateway.storage.durable import fsync_dir
 from schemas.backup import BackupHeader, BackupManifest
 from schemas.errors import Conflict, InvalidInput, NotFound
@@ -144,17 +145,17 @@ def _write(target: Path, stream, sha256: str | None, path: Path) -> int:
 
 def _check_database(database: Path, manifest: BackupManifest) -> None:
     conn = sqlite3.connect(database)
+    conn.row_factory = sqlite3.Row
     try:
         result = conn.execute("PRAGMA quick_check").fetchone()[0]
-        head = conn.execute("SELECT seq, hash FROM audit_log ORDER BY seq DESC LIMIT 1").fetchone()
+        head = audit.head(conn)
     except sqlite3.DatabaseError as exc:
         raise InvalidInput(f"the backed-up database does not open ({exc}); use another copy") from exc
     finally:
         conn.close()
     if result != "ok":
         raise InvalidInput(f"the backed-up database fails SQLite's integrity check ({result}); use another copy")
-    anchor = manifest.audit_head
-    if (head is None) != (anchor is None) or (head and (head[0], head[1]) != (anchor.seq, anchor.hash)):
+    if head != manifest.audit_head:
         raise InvalidInput("the backed-up database's last audit entry is not the one its manifest names; "
                            "use another copy")  # fmt: skip
 

@@ -24,6 +24,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from gateway.jobs.folders import SCRATCH, work_root
+from gateway.storage import audit
 from gateway.storage.blobs import media_root
 from schemas.audit import AuditHead
 from schemas.config import Config
@@ -134,7 +135,7 @@ def _refer(conn: sqlite3.Connection, copy: Path, layout: StateLayout, keys: dict
 
     migrations = [r["name"] for r in rows("SELECT name FROM _sqlite_migrations WHERE migration_set = 'burnedge'"
                                           " ORDER BY id", "_sqlite_migrations")]  # fmt: skip
-    head = rows("SELECT seq, hash FROM audit_log ORDER BY seq DESC LIMIT 1", "audit_log")
+    head = audit.head(conn) if "audit_log" in tables else None
     blobs = [(f"media/blobs/{sha[:2]}/{sha}", layout.media / "blobs" / sha[:2] / sha, sha)
              for (sha,) in rows("SELECT DISTINCT sha256 FROM assets ORDER BY sha256", "assets")]  # fmt: skip
     files: list[tuple[str, Path]] = []
@@ -154,7 +155,7 @@ def _refer(conn: sqlite3.Connection, copy: Path, layout: StateLayout, keys: dict
             site_id = json.loads(keys[PUBLIC_FILE]).get("site_id")
         except (ValueError, AttributeError):
             site_id = None
-    return Snapshot(database=copy, audit_head=AuditHead(seq=head[0]["seq"], hash=head[0]["hash"]) if head else None,
+    return Snapshot(database=copy, audit_head=head,
                     migrations=migrations, site_id=site_id, keys=keys, blobs=blobs, files=files,
                     outbox=outbox)  # fmt: skip
 
