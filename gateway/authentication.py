@@ -6,10 +6,17 @@ from __future__ import annotations
 from litestar.connection import ASGIConnection
 from litestar.middleware import AbstractAuthenticationMiddleware, AuthenticationResult, DefineMiddleware
 
-from schemas.errors import AuthenticationFailed
+from schemas.errors import AuthenticationFailed, PasswordChangeRequired
 
 EXCLUDE_OPT_KEY = "exclude_from_auth"
 """Set on the few handlers that are the ways in: health, login, pairing."""
+BEFORE_PASSWORD_CHANGE_OPT_KEY = "before_password_change"
+"""Set on the few handlers a session may use while its password must change (after an administrator's reset):
+changing it, /auth/me and logging out. Every other one answers 403."""
+MUST_CHANGE_PASSWORD = (
+    "you must change your password before you go on: POST /api/v1/auth/password with the temporary password an "
+    "administrator gave you as current_password and a new one (10+ characters) as new_password"
+)
 
 
 class SessionAuthMiddleware(AbstractAuthenticationMiddleware):
@@ -18,6 +25,8 @@ class SessionAuthMiddleware(AbstractAuthenticationMiddleware):
         if scheme.lower() != "bearer" or not token.strip():
             raise AuthenticationFailed("log in first: send Authorization: Bearer <access_token>")
         principal = connection.app.state.services.accounts.authenticate(token.strip())
+        if principal.must_change_password and not connection.route_handler.opt.get(BEFORE_PASSWORD_CHANGE_OPT_KEY):
+            raise PasswordChangeRequired(MUST_CHANGE_PASSWORD)
         return AuthenticationResult(user=principal, auth=token.strip())
 
 

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import getpass
 import json
 import logging
 import sys
@@ -11,7 +10,8 @@ from pathlib import Path
 
 import msgspec
 
-from gateway import __version__, cli_analysis, cli_backup, cli_sync
+from gateway import __version__, cli_analysis, cli_backup, cli_sync, cli_users
+from gateway.cli_help import examples
 from schemas.config import Config, load_config
 from schemas.errors import AuthenticationFailed, BurnedgeError, Conflict, InvalidInput, NotFound
 
@@ -87,35 +87,6 @@ def cmd_worker(args: argparse.Namespace) -> int:
         db.close()
     ran = worker_main(config, supervised=False, drain=args.drain)
     log.info("worker stopped after %d analyses", ran)
-    return 0
-
-
-def cmd_users_add(args: argparse.Namespace) -> int:
-    from gateway.services.accounts import AccountService
-    from gateway.storage.database import Database
-    from schemas.accounts import Role, UserCreate
-
-    config = _config(args)
-    password = sys.stdin.readline().rstrip("\n") if args.password_stdin else getpass.getpass("Password: ")
-    if args.center:
-        from sync.central.app import open_center_db
-
-        db = open_center_db(config.central)
-    else:
-        db = Database.from_config(config.gateway)
-        db.migrate()
-    try:
-        body = msgspec.convert(
-            {"username": args.username, "password": password, "role": args.role, "display_name": args.name or ""},
-            UserCreate,
-        )
-        user = AccountService(db, config.security).create_user(None, body)
-    except msgspec.ValidationError as exc:
-        raise InvalidInput(f"{exc} (usernames: lower-case letters, digits . _ -; passwords: 10+ characters;"
-                           f" roles: {', '.join(r.value for r in Role)})") from exc  # fmt: skip
-    finally:
-        db.close()
-    print(json.dumps({"id": user.id, "username": user.username, "role": user.role.value}))
     return 0
 
 
@@ -234,19 +205,27 @@ def _global_options_after_commands(parser: argparse.ArgumentParser) -> None:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="burnedge", description="Objective burn assessment at the clinic edge.")
+    parser = argparse.ArgumentParser(prog="burnedge", description="Objective burn assessment at the clinic edge.",
+                                     **examples("burnedge demo", "burnedge serve --host 0.0.0.0",
+                                                "burnedge users add --username admin --role admin",
+                                                "burnedge --config /etc/burnedge/burnedge.toml audit verify",
+                                                "burnedge COMMAND --help   # each command's options and examples"))  # fmt: skip
     _global_options(parser, None)
     parser.add_argument("--version", action="version", version=f"burnedge {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
-    serve = sub.add_parser("serve", help="run the gateway HTTP API")
+    serve = sub.add_parser("serve", help="run the gateway HTTP API", **examples(
+        "burnedge serve", "burnedge serve --host 0.0.0.0 --port 8080   # phones on the clinic network",
+        "burnedge --config /etc/burnedge/burnedge.toml serve"))  # fmt: skip
     serve.add_argument("--host", help="address to listen on (default [gateway] host, 127.0.0.1; 0.0.0.0 for the "
                        "clinic network)")  # fmt: skip
     serve.add_argument("--port", type=int, help="TCP port (default [gateway] port, 8080)")
     serve.set_defaults(func=cmd_serve)
 
     demo = sub.add_parser("demo", help="the whole system on this machine: demo patients, a 4-visit burn series "
-                                       "uploaded, analysed and aligned through the real gateway, then serve it")  # fmt: skip
+                                       "uploaded, analysed and aligned through the real gateway, then serve it",
+                          **examples("burnedge demo", "burnedge demo --exit --views 6 --size 960x720",
+                                     "burnedge demo --no-series --port 8081"))  # fmt: skip
     demo.add_argument("--host", help="address to listen on")
     demo.add_argument("--port", type=int, help="TCP port (default 8080)")
     demo.add_argument("--exit", "--no-serve", dest="exit", action="store_true",
@@ -259,20 +238,25 @@ def build_parser() -> argparse.ArgumentParser:
                       help="send the phantom's exact burn masks as a clinician's instead of using the model")  # fmt: skip
     demo.set_defaults(func=cmd_demo)
 
-    worker = sub.add_parser("worker", help="run queued analyses (beside a gateway started with [jobs] workers = 0)")
+    worker = sub.add_parser("worker", help="run queued analyses (beside a gateway started with [jobs] workers = 0)",
+                            **examples("burnedge worker", "burnedge --config /etc/burnedge/burnedge.toml worker --drain"))  # fmt: skip
     worker.add_argument("--drain", action="store_true", help="exit once no queued analysis is ready to run")
     worker.set_defaults(func=cmd_worker)
 
-    gate = sub.add_parser("gate", help="quality verdicts for photos, as JSON (no server needed)")
+    gate = sub.add_parser("gate", help="quality verdicts for photos, as JSON (no server needed)",
+                          **examples("burnedge gate IMG_0412.jpg", "burnedge gate visit1/*.jpg"))  # fmt: skip
     gate.add_argument("files", nargs="+", metavar="FILE", help="JPEG, PNG or HEIC photos")
     gate.set_defaults(func=cmd_gate)
 
-    frames = sub.add_parser("frames", help="extract a multi-view set of frames from a video (no server needed)")
+    frames = sub.add_parser("frames", help="extract a multi-view set of frames from a video (no server needed)",
+                            **examples("burnedge frames arm.mp4 --out arm-frames"))  # fmt: skip
     frames.add_argument("video", metavar="VIDEO", help="MP4 or MOV, H.264 or HEVC")
     frames.add_argument("--out", required=True, metavar="DIR", help="folder for the frames and frames.json")
     frames.set_defaults(func=cmd_frames)
 
-    rec = sub.add_parser("reconstruct", help="photos or a video -> scaled 3D surface mesh (PLY, GLB) and report")
+    rec = sub.add_parser("reconstruct", help="photos or a video -> scaled 3D surface mesh (PLY, GLB) and report",
+                         **examples("burnedge reconstruct visit1/ --out visit1-3d", "burnedge reconstruct arm.mp4 --out "
+                                    "arm-3d --ruler ruler.json --fresh"))  # fmt: skip
     rec.add_argument("source", metavar="SOURCE", help="folder of photos, or a video (MP4, MOV)")
     rec.add_argument("--out", required=True, metavar="DIR", help="analysis folder; an interrupted run resumes there")
     rec.add_argument("--ruler", metavar="FILE", help="JSON with two ruler points marked in 2+ pictures (no marker)")
@@ -284,8 +268,11 @@ def build_parser() -> argparse.ArgumentParser:
     cli_analysis.add_commands(sub, _config)
     cli_sync.add_commands(sub, _config)
     cli_backup.add_commands(sub, _config)
+    cli_users.add_commands(sub, _config)
 
-    phantom = sub.add_parser("phantom", help="render a burn phantom: multi-view photos with exact ground truth")
+    phantom = sub.add_parser("phantom", help="render a burn phantom: multi-view photos with exact ground truth",
+                             **examples("burnedge phantom --out phantom1", "burnedge phantom --out series --series",
+                                        "burnedge phantom --out foot --shape foot --views 8 --tone V --area-cm2 20"))  # fmt: skip
     phantom.add_argument("--out", required=True, metavar="DIR", help="folder for images/, masks/, ground_truth.json")
     phantom.add_argument("--shape", choices=["forearm", "patch", "foot"], help="body part (default forearm)")
     phantom.add_argument("--views", type=int, help="number of photos, 6-20 (default 12)")
@@ -301,21 +288,17 @@ def build_parser() -> argparse.ArgumentParser:
     phantom.add_argument("--no-exif", action="store_true", help="leave the focal length out of the JPEGs' EXIF")
     phantom.set_defaults(func=cmd_phantom)
 
-    users = sub.add_parser("users", help="manage user accounts").add_subparsers(dest="users_cmd", required=True)
-    add = users.add_parser("add", help="create an account (the first administrator, say)")
-    add.add_argument("--username", required=True, help="lower-case letters, digits . _ -, e.g. amani.k")
-    add.add_argument("--role", required=True, choices=["clinician", "nurse", "admin", "consultant"])
-    add.add_argument("--name", help="display name")
-    add.add_argument("--password-stdin", action="store_true", help="read the password from standard input")
-    add.add_argument("--center", action="store_true", help="an account at the burn center's server (consultants)")
-    add.set_defaults(func=cmd_users_add)
-
-    audit = sub.add_parser("audit", help="the audit trail").add_subparsers(dest="audit_cmd", required=True)
-    verify = audit.add_parser("verify", help="check the hash chain; names the first broken entry (exit 6)")
+    audit = sub.add_parser("audit", help="the audit trail", **examples("burnedge audit verify")).add_subparsers(
+        dest="audit_cmd", required=True)  # fmt: skip
+    verify = audit.add_parser("verify", help="check the hash chain; names the first broken entry (exit 6)",
+                              **examples("burnedge audit verify", "burnedge --config /etc/burnedge/burnedge.toml audit "
+                                         "verify"))  # fmt: skip
     verify.set_defaults(func=cmd_audit_verify)
 
-    schemas = sub.add_parser("schemas", help="message schemas").add_subparsers(dest="schemas_cmd", required=True)
-    export = schemas.add_parser("export", help="write JSON Schema for every public message")
+    schemas = sub.add_parser("schemas", help="message schemas", **examples("burnedge schemas export json-schemas"))
+    schemas = schemas.add_subparsers(dest="schemas_cmd", required=True)
+    export = schemas.add_parser("export", help="write JSON Schema for every public message",
+                                **examples("burnedge schemas export json-schemas"))  # fmt: skip
     export.add_argument("dir", help="output folder")
     export.set_defaults(func=cmd_schemas_export)
     _global_options_after_commands(parser)

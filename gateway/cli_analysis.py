@@ -12,6 +12,7 @@ from pathlib import Path
 
 import msgspec
 
+from gateway.cli_help import examples
 from schemas.config import Config
 from schemas.errors import InvalidInput, NotFound
 
@@ -204,13 +205,17 @@ def add_commands(sub, config_of: Callable[[argparse.Namespace], Config]) -> None
     def bind(func):
         return lambda args: func(args, config_of(args))
 
-    seg = sub.add_parser("segment", help="the burn segmentation model alone: one PNG mask per photo")
+    seg = sub.add_parser("segment", help="the burn segmentation model alone: one PNG mask per photo",
+                         **examples("burnedge segment visit1/ --out visit1-masks"))  # fmt: skip
     seg.add_argument("source", metavar="DIR", help="folder of photos")
     seg.add_argument("--out", required=True, metavar="OUT",
                      help="folder for STEM.png (255 = burn) and STEM.probability.png")  # fmt: skip
     seg.set_defaults(func=bind(cmd_segment))
 
-    ana = sub.add_parser("analyze", help="photos or a video -> burn area, perimeter, relief, volume (analysis.json)")
+    ana = sub.add_parser("analyze", help="photos or a video -> burn area, perimeter, relief, volume (analysis.json)",
+                         **examples("burnedge analyze visit1/ --out visit1-analysis",
+                                    "burnedge analyze visit1/ --out visit1-analysis --masks visit1-outlines/ "
+                                    "--hours-since-injury 30 --height-cm 160 --weight-kg 55"))  # fmt: skip
     ana.add_argument("source", metavar="DIR", help="folder of photos, or a video (MP4, MOV)")
     ana.add_argument("--out", required=True, metavar="OUT", help="analysis folder; an interrupted run resumes there")
     ana.add_argument("--masks", metavar="DIR",
@@ -225,7 +230,8 @@ def add_commands(sub, config_of: Callable[[argparse.Namespace], Config]) -> None
     ana.add_argument("--no-gate", action="store_true", help="use every decodable picture, even rejected ones")
     ana.set_defaults(func=bind(cmd_analyze))
 
-    trk = sub.add_parser("track", help="a burn's visits over time -> changes, healing rate, prompts (track.json)")
+    trk = sub.add_parser("track", help="a burn's visits over time -> changes, healing rate, prompts (track.json)",
+                         **examples("burnedge track day0/ day7/ day14/ day21/ --days 0,7,14,21 --out healing"))  # fmt: skip
     trk.add_argument("sessions", nargs="+", metavar="SESSION_DIR",
                      help="one folder per visit, in time order: its photos, or images/ with an optional masks/ "
                           "(a person's masks, STEM.png)")  # fmt: skip
@@ -237,7 +243,9 @@ def add_commands(sub, config_of: Callable[[argparse.Namespace], Config]) -> None
     trk.add_argument("--fresh", action="store_true", help="discard what an earlier run left in OUT")
     trk.set_defaults(func=bind(cmd_track))
 
-    train = sub.add_parser("train-segmentation", help="train the segmentation model on the CPU, export ONNX")
+    train = sub.add_parser("train-segmentation", help="train the segmentation model on the CPU, export ONNX",
+                           **examples("burnedge train-segmentation --out model/",
+                                      "burnedge train-segmentation --out model/ --recipe recipe.json --epochs 2"))  # fmt: skip
     train.add_argument("--data", default="../shared/datasets/fuseg2021-train", metavar="DIR",
                        help="wound photos with images/ and masks/ (default ../shared/datasets/fuseg2021-train)")  # fmt: skip
     train.add_argument("--out", required=True, metavar="DIR", help="folder for burnseg.onnx and its training report")

@@ -17,6 +17,7 @@ from pathlib import Path
 import msgspec
 
 from gateway.backup.crypto import FileKey
+from gateway.cli_help import examples
 from schemas.backup import BackupHeader
 from schemas.config import Config
 from schemas.errors import InvalidInput, NotFound
@@ -154,7 +155,12 @@ def add_commands(sub, load: Callable[[argparse.Namespace], Config]) -> None:
     def bind(parser, func) -> None:
         parser.set_defaults(func=lambda args: func(args, load(args)))
 
-    backup = sub.add_parser("backup", help="encrypted, consistent copy of the whole gateway state, while it serves")
+    backup = sub.add_parser("backup", help="encrypted, consistent copy of the whole gateway state, while it serves",
+                            **examples("burnedge backup --dir /mnt/backups --keep 14",
+                                       "burnedge backup --out state.burnedge-backup --recipient backup-recipient.pub.json",
+                                       "burnedge backup --out state.burnedge-backup --passphrase-file /root/passphrase",
+                                       "BURNEDGE_PASSPHRASE=... burnedge backup --out x.burnedge-backup --passphrase-env "
+                                       "BURNEDGE_PASSPHRASE", "burnedge backup keygen --out keys/"))  # fmt: skip
     backup.add_argument("--out", metavar="FILE", help="write the backup to FILE (replaced once the new one is whole)")
     backup.add_argument("--dir", metavar="DIR", help="write a dated backup into DIR and keep the newest N there "
                                                      "(default: [backup] folder)")  # fmt: skip
@@ -162,11 +168,16 @@ def add_commands(sub, load: Callable[[argparse.Namespace], Config]) -> None:
     _key_options(backup, identity=False)
     bind(backup, cmd_backup)
     backup_sub = backup.add_subparsers(dest="backup_cmd", metavar="SUBCOMMAND")
-    keygen = backup_sub.add_parser("keygen", help="make a recipient key pair; its private half goes off the gateway")
+    keygen = backup_sub.add_parser("keygen", help="make a recipient key pair; its private half goes off the gateway",
+                                   **examples("burnedge backup keygen --out /media/usb"))  # fmt: skip
     keygen.add_argument("--out", dest="keygen_out", required=True, metavar="DIR", help="folder for the two files")
     bind(keygen, cmd_keygen)
 
-    restore = sub.add_parser("restore", help="check a backup whole, then restore it into a new folder")
+    restore = sub.add_parser("restore", help="check a backup whole, then restore it into a new folder", **examples(
+        "burnedge restore state.burnedge-backup --check --identity backup-recipient.key.json",
+        "burnedge restore state.burnedge-backup --into /var/lib/burnedge-restored --identity backup-recipient.key.json",
+        "burnedge restore state.burnedge-backup --into /var/lib/burnedge --force --passphrase-file passphrase.txt",
+        "burnedge restore state.burnedge-backup --check --passphrase-env BURNEDGE_PASSPHRASE"))  # fmt: skip
     restore.add_argument("file", metavar="FILE", help="the backup file")
     restore.add_argument("--into", metavar="DIR", help="folder to restore into (new or empty)")
     restore.add_argument("--force", action="store_true", help="restore into a folder that is not empty")

@@ -34,11 +34,27 @@ class User(Frozen):
     display_name: str
     active: bool
     created_at: Timestamp
+    must_change_password: bool = False
+    """Set by an administrator's password reset: until the user changes it, a session may only change the
+    password (POST /api/v1/auth/password), read /auth/me and log out."""
 
 
 class LoginRequest(Message):
     username: Annotated[str, msgspec.Meta(max_length=64)]
     password: Annotated[str, msgspec.Meta(max_length=256)]
+
+
+class PasswordChange(Message):
+    """POST /api/v1/auth/password: a user changes their own password."""
+
+    current_password: Annotated[str, msgspec.Meta(max_length=256)]
+    new_password: Password
+
+
+class PasswordReset(Message):
+    """POST /api/v1/admin/users/{id}/reset-password: a temporary password the user must change at next sign-in."""
+
+    password: Password
 
 
 class Session(Frozen):
@@ -89,6 +105,8 @@ class Identity(Frozen):
     username: str
     role: Role
     device_id: str | None
+    must_change_password: bool = False
+    """True after an administrator's reset: change the password (POST /api/v1/auth/password) before anything else."""
 
 
 class Health(Frozen):

@@ -92,6 +92,21 @@ class Forbidden(BurnedgeError):
     title = "Not allowed for this role"
 
 
+class PasswordChangeRequired(Forbidden):
+    """An administrator reset this account's password: until its user changes it, the session may only change it,
+    read /auth/me and log out."""
+
+    slug = "password-change-required"
+    title = "Password change required"
+
+
+class WrongPassword(Forbidden):
+    """The current password given to change it is wrong (403, not 401: the session itself is fine)."""
+
+    slug = "wrong-password"
+    title = "Wrong password"
+
+
 class TooManyAttempts(BurnedgeError):
     status = 429
     slug = "too-many-attempts"

@@ -1,8 +1,11 @@
-"""The command line: every command documented, schemas exported, users created, demo seeded."""
+"""The command line: every command and option documented, every --help with examples, schemas exported, users
+created, demo seeded."""
 
 from __future__ import annotations
 
+import argparse
 import json
+import re
 import subprocess
 import sys
 
@@ -24,10 +27,57 @@ def _commands(parser, prefix=()) -> list[tuple[str, ...]]:
     return found
 
 
+def _parsers(parser, prefix=()) -> list[tuple[tuple[str, ...], argparse.ArgumentParser]]:
+    """Every parser in the tree, the top one (prefix ()) included, with its command path."""
+    found = [(prefix, parser)]
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for name, sub in action.choices.items():
+                found += _parsers(sub, (*prefix, name))
+    return found
+
+
+PARSERS = _parsers(build_parser())
+GLOBAL_OPTIONS = {"--config", "--db", "--verbose"}
+"""Accepted after every command too; documented once, as the global options."""
+
+
+def _readme_blocks() -> list[str]:
+    """README.md in paragraphs and table rows: where a command is documented with its options."""
+    return re.split(r"\n\s*\n|\n(?=\|)", (REPO / "README.md").read_text())
+
+
+def _mentions(block: str, words: str) -> bool:
+    return re.search(rf"(?<![\w-]){re.escape(words)}(?![\w-])", block) is not None
+
+
 @pytest.mark.parametrize("command", _commands(build_parser()), ids=" ".join)
 def test_every_cli_command_is_documented_in_the_readme(command):
     readme = (REPO / "README.md").read_text()
     assert f"burnedge {' '.join(command)}" in readme, f"document `burnedge {' '.join(command)}` in README.md"
+
+
+@pytest.mark.parametrize(("command", "parser"), PARSERS, ids=[" ".join(("burnedge", *c)) for c, _ in PARSERS])
+def test_every_option_of_every_command_is_documented_with_it_in_the_readme(command, parser):
+    """Each long flag is named in a README paragraph or table row that names the command (the global options in
+    the paragraph about them)."""
+    name = " ".join(("burnedge", *command))
+    flags = {f for a in parser._actions for f in a.option_strings if f.startswith("--") and f != "--help"}
+    if command:
+        flags -= GLOBAL_OPTIONS
+    blocks = [b for b in _readme_blocks() if _mentions(b, name if command else "Global options")]
+    assert blocks, f"README.md has no paragraph or table row naming `{name}`"
+    missing = sorted(f for f in flags if not any(_mentions(b, f) for b in blocks))
+    assert not missing, f"README.md does not document {', '.join(missing)} where it documents `{name}`"
+
+
+@pytest.mark.parametrize(("command", "parser"), PARSERS, ids=[" ".join(("burnedge", *c)) for c, _ in PARSERS])
+def test_every_command_help_shows_an_example(command, parser):
+    name = " ".join(("burnedge", *command))
+    text = parser.format_help()
+    assert "examples:" in text, f"`{name} --help` shows no example: give its parser examples(...) (gateway/cli_help.py)"
+    shown = text[text.index("examples:") :].splitlines()[1:]
+    assert any(name in line for line in shown), f"`{name} --help`: no example runs `{name}`"
 
 
 def test_schemas_export_writes_a_json_schema_per_message(tmp_path):

@@ -31,6 +31,7 @@ def test_migrations_are_recorded_and_applied_once(tmp_path):
         "m005_video_frames",
         "m006_analysis_jobs",
         "m007_sync",
+        "m008_must_change_password",
     ]
     assert db.migrate() == []
     assert db.connection().execute("PRAGMA journal_mode").fetchone()[0] == "wal"

@@ -7,6 +7,7 @@ from typing import Annotated
 from litestar import Controller, Request, get, post
 from litestar.params import HeaderParameter, JSONBody, QueryParameter
 
+from gateway.authentication import BEFORE_PASSWORD_CHANGE_OPT_KEY
 from gateway.controllers.common import IdPath
 from gateway.controllers.problems import BODY, ONE, SESSION, problems
 from gateway.dependencies import AuthedRequest, ServicesDep, client_address
@@ -19,6 +20,8 @@ from schemas.accounts import (
     PairingCode,
     PairingCodeRequest,
     PairRequest,
+    PasswordChange,
+    PasswordReset,
     Session,
     User,
     UserCreate,
@@ -47,14 +50,23 @@ class AuthController(Controller):
     def pair(self, request: Request, data: JSONBody[PairRequest], services: ServicesDep) -> DeviceToken:
         return services.accounts.pair(data, client=client_address(request))
 
-    @post("/logout", sync_to_thread=True, status_code=204, summary="End this session", responses=problems(401))
+    @post("/logout", sync_to_thread=True, status_code=204, summary="End this session", responses=problems(401),
+          opt={BEFORE_PASSWORD_CHANGE_OPT_KEY: True})  # fmt: skip
     def logout(self, request: AuthedRequest, services: ServicesDep) -> None:
         services.accounts.logout(request.user)
 
-    @get("/me", sync_to_thread=False, summary="Who am I", responses=problems(401))
+    @get("/me", sync_to_thread=False, summary="Who am I", responses=problems(401),
+         opt={BEFORE_PASSWORD_CHANGE_OPT_KEY: True})  # fmt: skip
     def me(self, request: AuthedRequest) -> Identity:
         p = request.user
-        return Identity(user_id=p.user_id, username=p.username, role=p.role, device_id=p.device_id)
+        return Identity(user_id=p.user_id, username=p.username, role=p.role, device_id=p.device_id,
+                        must_change_password=p.must_change_password)  # fmt: skip
+
+    @post("/password", sync_to_thread=True, status_code=200, opt={BEFORE_PASSWORD_CHANGE_OPT_KEY: True},
+          summary="Change your own password (needs the current one); your other sessions end, this one stays",
+          responses=problems(*BODY, 401, 403, 422, 429))  # fmt: skip
+    def change_password(self, data: JSONBody[PasswordChange], request: AuthedRequest, services: ServicesDep) -> User:
+        return services.accounts.change_password(request.user, data)
 
 
 class AdminController(Controller):
@@ -74,6 +86,14 @@ class AdminController(Controller):
           responses=problems(*ONE, 409))  # fmt: skip
     def enable_user(self, user_id: IdPath, request: AuthedRequest, services: ServicesDep) -> User:
         return services.accounts.set_active(request.user, user_id, True)
+
+    @post("/users/{user_id:str}/reset-password", sync_to_thread=True, status_code=200,
+          summary="Set a temporary password the user must change at next sign-in; their sessions end at once",
+          responses=problems(*BODY, *ONE, 409))  # fmt: skip
+    def reset_password(
+        self, user_id: IdPath, data: JSONBody[PasswordReset], request: AuthedRequest, services: ServicesDep
+    ) -> User:
+        return services.accounts.reset_password(request.user, user_id, data.password, temporary=True)
 
     @get("/users", sync_to_thread=False, summary="List user accounts", responses=problems(*SESSION))
     def list_users(self, request: AuthedRequest, services: ServicesDep) -> list[User]:

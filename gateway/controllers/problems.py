@@ -16,7 +16,8 @@ from schemas.problem import Problem
 MEANING = {
     400: "The request is malformed (a field, a parameter, a header or the JSON itself): nothing was stored",
     401: "No valid session (log in again), or a wrong username, password or code",
-    403: "Your role may not do this",
+    403: "Your role may not do this, a wrong current password, or your password must be changed first (after an "
+    "administrator's reset only POST /api/v1/auth/password, GET /api/v1/auth/me and logout are open)",
     404: "No such record",
     409: "Conflicts with what is stored: `current` holds the stored record where there is one",
     410: "The upload was finished, abandoned or has expired: start a new one",

@@ -1,4 +1,4 @@
-"""Users, login sessions, phone pairing and device tokens.
+"""Login sessions, phone pairing and device tokens; users and passwords are in gateway/services/users.py.
 
 Passwords are hashed with Argon2id (argon2-cffi). Session and device tokens are
 random 256-bit strings; only their SHA-256 is stored, so a copied database does not
@@ -16,6 +16,7 @@ import argon2
 
 from gateway.services.permissions import Principal, require_admin
 from gateway.services.throttle import LoginThrottle
+from gateway.services.users import UserCare, user_from_row
 from gateway.storage import audit
 from gateway.storage.database import Database
 from schemas.accounts import (
@@ -26,12 +27,10 @@ from schemas.accounts import (
     PairRequest,
     Role,
     Session,
-    User,
-    UserCreate,
 )
 from schemas.base import iso, utcnow
 from schemas.config import SecurityConfig
-from schemas.errors import AuthenticationFailed, Conflict, NotFound
+from schemas.errors import AuthenticationFailed, NotFound
 from schemas.ids import uuid7
 
 _CODE_ALPHABET = "ABCDEFGHJKMNPQRSTVWXYZ23456789"  # no 0/O, 1/I/L: read aloud and typed on a phone
@@ -41,14 +40,9 @@ def token_hash(token: str) -> str:
     return hashlib.sha256(token.encode("utf-8")).hexdigest()
 
 
-def _user(row) -> User:
-    return User(
-        id=row["id"], username=row["username"], role=Role(row["role"]), display_name=row["display_name"],
-        active=bool(row["active"]), created_at=dt.datetime.fromisoformat(row["created_at"]),
-    )  # fmt: skip
+class AccountService(UserCare):
+    """Logins, sessions, phones; account care (users, passwords) comes from UserCare."""
 
-
-class AccountService:
     def __init__(self, db: Database, config: SecurityConfig):
         self.db = db
         self.config = config
@@ -61,49 +55,6 @@ class AccountService:
         # Verifying against this keeps a login for an unknown user as slow as for a known one.
         self._dummy_hash = self._hash(secrets.token_hex(16))
         self.throttle = LoginThrottle(db, config)
-
-    # users ---------------------------------------------------------------
-    def create_user(self, actor: Principal | None, body: UserCreate) -> User:
-        """Create an account. actor None is the command line on the gateway itself."""
-        if actor is not None:
-            require_admin(actor, "manage_users")
-        password_hash = self._hash(body.password)
-        user_id = uuid7()
-        with self.db.write() as conn:
-            if conn.execute("SELECT 1 FROM users WHERE username = ?", (body.username,)).fetchone():
-                raise Conflict(f"the username {body.username!r} is taken")
-            conn.execute(
-                "INSERT INTO users (id, username, password_hash, role, display_name, active, created_at)"
-                " VALUES (?,?,?,?,?,1,?)",
-                (user_id, body.username, password_hash, body.role.value, body.display_name, iso(utcnow())),
-            )
-            audit.append(
-                conn, action="user.create", user_id=actor.user_id if actor else None,
-                device_id=actor.device_id if actor else None, kind="user", record_id=user_id,
-                detail=f"{body.username} as {body.role.value}",
-            )  # fmt: skip
-            return _user(conn.execute("SELECT * FROM users WHERE id = ?", (user_id,)).fetchone())
-
-    def set_active(self, actor: Principal, user_id: str, active: bool) -> User:
-        """Disable (ending every session at once) or re-enable an account."""
-        require_admin(actor, "manage_users")
-        if user_id == actor.user_id and not active:
-            raise Conflict("you cannot disable your own account")
-        with self.db.write() as conn:
-            row = conn.execute("SELECT * FROM users WHERE id = ?", (user_id,)).fetchone()
-            if row is None:
-                raise NotFound(f"no user with id {user_id}")
-            conn.execute("UPDATE users SET active = ? WHERE id = ?", (int(active), user_id))
-            if not active:
-                conn.execute("UPDATE sessions SET revoked_at = ? WHERE user_id = ? AND revoked_at IS NULL",
-                             (iso(utcnow()), user_id))  # fmt: skip
-            audit.append(conn, action="user.enable" if active else "user.disable", user_id=actor.user_id,
-                         device_id=actor.device_id, kind="user", record_id=user_id, detail=row["username"])  # fmt: skip
-            return _user(conn.execute("SELECT * FROM users WHERE id = ?", (user_id,)).fetchone())
-
-    def list_users(self, actor: Principal) -> list[User]:
-        require_admin(actor, "manage_users")
-        return [_user(r) for r in self.db.connection().execute("SELECT * FROM users ORDER BY username")]
 
     # login ---------------------------------------------------------------
     def login(self, username: str, password: str, *, client: str, device_token: str | None) -> Session:
@@ -136,7 +87,7 @@ class AccountService:
                 conn.execute("UPDATE devices SET last_seen_at = ? WHERE id = ?", (iso(now), device_id))
             self.throttle.succeeded(conn, account_key, [client_key])
             audit.append(conn, action="auth.login", user_id=row["id"], device_id=device_id)
-        return Session(access_token=token, expires_at=expires, user=_user(row), device_id=device_id)
+        return Session(access_token=token, expires_at=expires, user=user_from_row(row), device_id=device_id)
 
     def _hash(self, password: str) -> str:
         with self._hashing:
@@ -170,6 +121,7 @@ class AccountService:
             self.db.connection()
             .execute(
                 "SELECT s.user_id, s.device_id, s.expires_at, s.revoked_at, u.username, u.role, u.active,"
+                " u.must_change_password,"
                 " d.revoked_at AS device_revoked_at FROM sessions s JOIN users u ON u.id = s.user_id"
                 " LEFT JOIN devices d ON d.id = s.device_id WHERE s.token_hash = ?",
                 (th,),
@@ -182,7 +134,8 @@ class AccountService:
             raise AuthenticationFailed("session unknown or ended: log in again")
         if dt.datetime.fromisoformat(row["expires_at"]) <= utcnow():
             raise AuthenticationFailed("session expired: log in again")
-        return Principal(row["user_id"], row["username"], Role(row["role"]), row["device_id"], th)
+        return Principal(row["user_id"], row["username"], Role(row["role"]), row["device_id"], th,
+                         must_change_password=bool(row["must_change_password"]))  # fmt: skip
 
     def logout(self, principal: Principal) -> None:
         with self.db.write() as conn:

@@ -50,6 +50,8 @@ class Principal:
     role: Role
     device_id: str | None
     session_hash: str
+    must_change_password: bool = False
+    """An administrator reset the password: the session may only change it (gateway/authentication.py)."""
 
 
 def readable_kinds(principal: Principal) -> frozenset[RecordKind]:

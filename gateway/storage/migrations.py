@@ -256,3 +256,11 @@ def m007_sync(db: Database) -> None:
     )
     db.execute("CREATE INDEX outbox_state ON outbox (state, created_at)")
     db.execute("CREATE TABLE sync_state (key TEXT PRIMARY KEY, value TEXT NOT NULL)")
+
+
+@migrations()
+def m008_must_change_password(db: Database) -> None:
+    """Set by an administrator's password reset; cleared when the user changes the password (the center's
+    consultants' accounts get it too: sync/central/migrations.py)."""
+    db.execute("ALTER TABLE users ADD COLUMN must_change_password INTEGER NOT NULL DEFAULT 0")
+

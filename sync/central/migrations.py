@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from sqlite_utils import Database, Migrations
 
-from gateway.storage.migrations import m002_accounts, m003_audit
+from gateway.storage.migrations import m002_accounts, m003_audit, m008_must_change_password
 from sync.peers import PEERS_DDL
 
 central_migrations = Migrations("burnedge-central")
@@ -108,3 +108,9 @@ def c002_audit_anchors(db: Database) -> None:
         )"""
     )
     db.execute("CREATE INDEX audit_anchors_site ON audit_anchors (site_id, seq)")
+
+
+@central_migrations()
+def c003_must_change_password(db: Database) -> None:
+    """Consultants' accounts share the gateway's account code: an administrator's reset forces a change."""
+    m008_must_change_password(db)
