@@ -27,17 +27,23 @@ from schemas.record_parts import (
     Circulation,
     Disability,
     Exposure,
-    FluidGiven,
     Intake,
     Mechanism,
     MechanismType,
     PrimarySurvey,
-    Resuscitation,
+    SecondarySurvey,
 )  # fmt: skip
 from schemas.records import RecordKind
 
-DEMO_PATIENT_ID = "0192f3b4-6a8e-7c3d-9b1a-2f4e5d6c7b8a"
-DEMO_ENCOUNTER_ID = "0192f3b4-6a8f-7000-8000-00000000e001"
+DEMO_PATIENT_ID = "0192f3b4-6a8e-7c3d-9b1a-2f4e5d6c7b99"
+"""The one demo patient: the healing series (gateway/demo_series.py) is his forearm burn."""
+DEMO_VISIT_IDS = [f"0192f3b4-6a8f-7000-8000-00000000f00{i}" for i in range(4)]
+DEMO_ENCOUNTER_ID = DEMO_VISIT_IDS[0]
+"""The day-0 emergency visit, with the full record."""
+SERIES_DAYS = (0, 7, 14, 21)
+BURN_REGION_FRACTION = 0.065
+"""The charted share of the right forearm's back (Lund-Browder: 1.5 % of an adult's body surface): about 18 cm2 on
+this patient (1.85 m2), the size of the rendered burn."""
 DEMO_USERS = {"admin": Role.admin, "clinician": Role.clinician, "nurse": Role.nurse, "consultant": Role.consultant}
 
 
@@ -58,40 +64,40 @@ def seed_accounts(services: Services, credentials_file: Path) -> dict[str, str]:
 
 
 def seed_patient(services: Services) -> None:
+    """The demo patient: a small deep partial-thickness burn of the right forearm from a pan of hot oil, seen on
+    the day and at 7, 14 and 21 days (the visits the series' photos belong to)."""
     conn = services.db.connection()
     row = conn.execute("SELECT id FROM users WHERE username = 'clinician'").fetchone()
     who = Principal(row["id"], "clinician", Role.clinician, None, "demo-seed")
     if services.records.list_records(who, RecordKind.patient, limit=1):
         return
-    now = utcnow().replace(microsecond=0)
-    injury = now - dt.timedelta(hours=2)
+    first = utcnow().replace(microsecond=0) - dt.timedelta(days=SERIES_DAYS[-1], hours=1)
+    injury = first - dt.timedelta(hours=3)
     enc = DEMO_ENCOUNTER_ID
     records = [
         (RecordKind.patient, DEMO_PATIENT_ID, Patient(
-            id=DEMO_PATIENT_ID, given_name="Amina", family_name="Demo", date_of_birth=dt.date(1991, 4, 12),
-            sex=Sex.female, weight_kg=62.0, weight_source=WeightSource.measured, height_cm=165.0)),
-        (RecordKind.encounter, enc, Encounter(
-            id=enc, patient_id=DEMO_PATIENT_ID, mode=EncounterMode.emergency, time_of_injury=injury,
-            time_of_arrival=injury + dt.timedelta(minutes=50), clinician="Dr. Demo", facility="Demo field clinic")),
+            id=DEMO_PATIENT_ID, given_name="Tomas", family_name="Demo", date_of_birth=dt.date(1984, 9, 2),
+            sex=Sex.male, weight_kg=71.0, weight_source=WeightSource.measured, height_cm=174.0)),
+        *[(RecordKind.encounter, visit, Encounter(
+            id=visit, patient_id=DEMO_PATIENT_ID, mode=EncounterMode.emergency if day == 0 else EncounterMode.consultation,
+            time_of_injury=injury, time_of_arrival=first + dt.timedelta(days=day), clinician="Dr. Demo",
+            facility="Demo field clinic")) for day, visit in zip(SERIES_DAYS, DEMO_VISIT_IDS, strict=True)],
         (RecordKind.intake, enc, Intake(
-            encounter_id=enc, history_of_present_illness="Kerosene stove flare while cooking, clothing caught fire;"
-            " flames smothered by a neighbour after about 20 s.", no_known_allergies=True)),
-        (RecordKind.mechanism, enc, Mechanism(encounter_id=enc, type=MechanismType.flame, duration_s=20,
-                                              agent="kerosene stove")),
+            encounter_id=enc, history_of_present_illness="A pan of hot cooking oil tipped over the back of the right"
+            " forearm while cooking; cooled under running water for 20 minutes at home.", no_known_allergies=True)),
+        (RecordKind.mechanism, enc, Mechanism(encounter_id=enc, type=MechanismType.scald, duration_s=5,
+                                              agent="hot cooking oil")),
         (RecordKind.primary_survey, enc, PrimarySurvey(
-            encounter_id=enc, assessed_at=injury + dt.timedelta(minutes=55), airway=Airway(patent=True),
-            breathing=Breathing(respiratory_rate_per_min=22, spo2_percent=97),
-            circulation=Circulation(heart_rate_per_min=112, systolic_bp_mmhg=118, diastolic_bp_mmhg=74, iv_access=True),
-            disability=Disability(gcs_eye=4, gcs_verbal=5, gcs_motor=6), exposure=Exposure(temperature_c=36.4,
-            burn_cooled=True, cooling_minutes=20))),
-        (RecordKind.burn_chart, enc, BurnChart(encounter_id=enc, assessed_at=injury + dt.timedelta(minutes=70), entries=[
-            BurnChartEntry(region=R.trunk_anterior, fraction=0.6, depth=BurnDepth.deep_partial),
-            BurnChartEntry(region=R.upper_arm_right_anterior, fraction=1.0, depth=BurnDepth.superficial_partial),
-            BurnChartEntry(region=R.lower_arm_right_anterior, fraction=1.0, depth=BurnDepth.superficial_partial),
-            BurnChartEntry(region=R.thigh_right_anterior, fraction=0.5, depth=BurnDepth.full_thickness),
-            BurnChartEntry(region=R.neck_anterior, fraction=1.0, depth=BurnDepth.superficial)])),
-        (RecordKind.resuscitation, enc, Resuscitation(encounter_id=enc, fluid_given=[
-            FluidGiven(volume_ml=500, given_at=injury + dt.timedelta(minutes=60))])),
+            encounter_id=enc, assessed_at=first + dt.timedelta(minutes=5), airway=Airway(patent=True),
+            breathing=Breathing(respiratory_rate_per_min=16, spo2_percent=99),
+            circulation=Circulation(heart_rate_per_min=88, systolic_bp_mmhg=128, diastolic_bp_mmhg=80),
+            disability=Disability(gcs_eye=4, gcs_verbal=5, gcs_motor=6), exposure=Exposure(temperature_c=36.8,
+            burn_cooled=True, cooling_minutes=20, jewellery_removed=True), pain_poorly_controlled=False)),
+        (RecordKind.secondary_survey, enc, SecondarySurvey(encounter_id=enc, assessed_at=first + dt.timedelta(minutes=10),
+                                                           notes="No other injury; no blistering elsewhere.")),
+        (RecordKind.burn_chart, enc, BurnChart(encounter_id=enc, assessed_at=first + dt.timedelta(minutes=15), entries=[
+            BurnChartEntry(region=R.lower_arm_right_posterior, fraction=BURN_REGION_FRACTION,
+                           depth=BurnDepth.deep_partial)])),
     ]  # fmt: skip
     for kind, record_id, struct in records:
         services.records.create(who, kind, record_id, struct)
@@ -124,17 +130,29 @@ def seed_demo(config: Config) -> tuple[str, dict[str, str]]:
         db.close()
 
 
+def _fluid_line(fluids: dict) -> str:
+    if not fluids["formal_resuscitation_indicated"]:
+        target = fluids["urine_output_target"]
+        return (f"formal resuscitation not indicated ({fluids['tbsa_percent']:g} %TBSA, below "
+                f"{fluids['formal_resuscitation_threshold_percent']:g} %): oral or maintenance fluids; urine output "
+                f"{target['ml_per_h_low']:.0f}-{target['ml_per_h_high']:.0f} mL/h")  # fmt: skip
+    return (
+        f"{fluids['formula']}, {fluids['ml_per_kg_per_percent']} mL/kg/%TBSA: 24 h {fluids['total_24h_ml']:.0f} mL;"
+        f" run {fluids['rate_now_ml_per_h']:.0f} mL/h now ({fluids['fluid_given_ml']:.0f} mL already given)"
+    )
+
+
 def _summary(services: Services, config: Config, passwords: dict[str, str], db_path: Path) -> str:
     who = Principal("demo", "clinician", Role.clinician, None, "demo")
     result = services.records.get(who, RecordKind.assessment, DEMO_ENCOUNTER_ID).data
     tbsa, fluids, referral = result["tbsa"], result["fluids"], result["referral"]
     base = f"http://{config.gateway.host}:{config.gateway.port}"
     lines = [
-        "burnedge demo: one patient seeded in " + str(db_path),
+        "burnedge demo: one patient seeded in " + str(db_path) + ": Tomas Demo, a deep partial-thickness burn of the"
+        " right forearm (hot oil), seen on the day and at 7, 14 and 21 days",
         f"  %TBSA (Lund-Browder, superficial excluded): {tbsa['tbsa_percent']:.1f} %"
         f"  (Rule of Nines: {tbsa['rule_of_nines_percent']:.1f} %)",
-        f"  Fluids ({fluids['formula']}, {fluids['ml_per_kg_per_percent']} mL/kg/%TBSA): 24 h {fluids['total_24h_ml']:.0f} mL;"
-        f" run {fluids['rate_now_ml_per_h']:.0f} mL/h now ({fluids['fluid_given_ml']:.0f} mL already given)",
+        "  Fluids: " + _fluid_line(fluids),
         f"  Referral ({referral['current']['version']}): {referral['current']['recommendation']}",
         "  " + result["notice"],
         "",

@@ -56,9 +56,10 @@ class GatewayClient:
     def get(self, path: str, what: str) -> dict | list:
         return self._check(self.http.get(path), what).json()
 
-    def upload(self, path: Path, encounter_id: str, attempts: int = 5) -> dict:
-        """One photo over tus; a dropped connection resumes from the offset the gateway has. Returns the upload."""
-        data = path.read_bytes()
+    def upload(self, path: Path, encounter_id: str, attempts: int = 5, data: bytes | None = None) -> dict:
+        """One photo over tus (`data` instead of the file's bytes when given); a dropped connection resumes from the
+        offset the gateway has. Returns the upload."""
+        data = path.read_bytes() if data is None else data
         meta = ",".join(f"{k} {base64.b64encode(v.encode()).decode()}"
                         for k, v in {"encounter_id": encounter_id, "filename": path.name}.items())  # fmt: skip
         r = self._check(self.http.post("/api/v1/uploads", headers={**TUS, "Upload-Length": str(len(data)),

@@ -29,7 +29,9 @@ class ProgressBar:
         state = event.get("state", "")
         text = f"{label} [{'#' * filled}{'.' * (WIDTH - filled)}] {100 * fraction:3.0f}%  {event.get('message', '')}"
         if state == "queued":
-            text = f"{label} [{'.' * WIDTH}]   0%  waiting in the queue"
+            # A retry says why the try before it ended ('try 1 ended by SIGSEGV in the mesh stage; retrying from mesh').
+            waiting = event.get("message") if event.get("error") else "waiting in the queue"
+            text = f"{label} [{'#' * filled}{'.' * (WIDTH - filled)}] {100 * fraction:3.0f}%  {waiting}"
         key = f"{state}/{event.get('stage', '')}"
         if self.tty:
             self.line(text, final=False)
@@ -37,21 +39,32 @@ class ProgressBar:
             self.line(text)
         self.last[label] = key
 
-    def done(self, label: str, event: dict) -> None:
+    def done(self, label: str, event: dict, history: list[str] = ()) -> None:
         state = event.get("state")
         if state == "done":
             self.line(f"{label} [{'#' * WIDTH}] 100%  finished ({event.get('result_status')})")
         else:
             self.line(f"{label} {state}: {event.get('error') or event.get('message', '')}")
+        for line in history:  # tries that crashed before this one: never silent
+            self.line(f"{label}   {line}")
 
 
 def _fmt(value, spec: str = ".2f", unit: str = "") -> str:
     return "-" if value is None else f"{value:{spec}}{unit}"
 
 
+def _provisional(result: dict) -> str:
+    """'yes (3 h)': the pictures were taken under 72 h after the injury; '?' when that time is unknown."""
+    hours = result.get("hours_since_injury")
+    if result.get("provisional") is None:
+        return "?"
+    return f"yes ({hours:.0f} h)" if result["provisional"] else "no"
+
+
 def summary_table(track: dict, jobs: list[dict], results: list[dict]) -> str:
     """Per visit: area, perimeter, relief, volume, confidence, change and alignment; then the trend."""
-    rows = [("visit", "area cm2", "perim. cm", "relief mm", "volume cm3", "confidence", "area change", "align RMSE")]
+    rows = [("visit", "area cm2", "perim. cm", "relief mm", "volume cm3", "confidence", "provisional", "area change",
+             "align RMSE")]  # fmt: skip
     sessions = track.get("sessions", [])
     for i, result in enumerate(results):
         m = result.get("metrics", {})
@@ -62,7 +75,7 @@ def summary_table(track: dict, jobs: list[dict], results: list[dict]) -> str:
             _fmt(m.get("area_cm2")), _fmt(m.get("perimeter_cm")), _fmt(m.get("relief_max_mm")),
             _fmt(m.get("volume_cm3"), ".3f"),
             f"{conf.get('level', '-')} {conf.get('score', 0):.2f}" if conf else result.get("status", "-"),
-            _fmt(s.get("area_change_percent"), "+.1f", " %"), _fmt(s.get("registration_rmse_mm"), ".2f", " mm"),
+            _provisional(result), _fmt(s.get("area_change_percent"), "+.1f", " %"), _fmt(s.get("registration_rmse_mm"), ".2f", " mm"),
         ))  # fmt: skip
     widths = [max(len(str(r[c])) for r in rows) for c in range(len(rows[0]))]
     lines = ["  ".join(str(v).rjust(w) if c else str(v).ljust(w) for c, (v, w) in enumerate(zip(r, widths, strict=True)))

@@ -21,14 +21,14 @@ import httpx
 import uvicorn
 
 from gateway.app import create_app
+from gateway.demo import DEMO_PATIENT_ID, DEMO_VISIT_IDS, SERIES_DAYS
 from gateway.demo_client import GatewayClient, GatewayError
 from gateway.demo_progress import ProgressBar
 from gateway.server import SHUTDOWN_GRACE_S
+from processing.capture.stamp import with_capture_time
 from schemas.config import Config
 
-SERIES_PATIENT_ID = "0192f3b4-6a8e-7c3d-9b1a-2f4e5d6c7b99"
-VISIT_IDS = [f"0192f3b4-6a8f-7000-8000-00000000f00{i}" for i in range(4)]
-SERIES_DAYS = (0, 7, 14, 21)
+SERIES_PATIENT_ID, VISIT_IDS = DEMO_PATIENT_ID, DEMO_VISIT_IDS
 
 
 @dataclass(frozen=True)
@@ -95,43 +95,27 @@ class ServedGateway:
         self.thread.join(timeout=30)
 
 
-def record_visits(client: GatewayClient) -> list[str]:
-    """The series patient and four visits; what an earlier demo run recorded is reused."""
-    first = dt.datetime.now(dt.UTC).replace(microsecond=0) - dt.timedelta(days=SERIES_DAYS[-1], hours=1)
-    if not _exists(client, f"/api/v1/patients/{SERIES_PATIENT_ID}"):
-        client.post("/api/v1/patients", {"id": SERIES_PATIENT_ID, "given_name": "Tomas", "family_name": "Demo",
-                                         "date_of_birth": "1984-09-02", "sex": "male", "weight_kg": 71.0,
-                                         "weight_source": "measured", "height_cm": 174.0}, "record the series patient")  # fmt: skip
-    for day, visit_id in zip(SERIES_DAYS, VISIT_IDS, strict=True):
-        if _exists(client, f"/api/v1/encounters/{visit_id}"):
-            continue
-        arrival = first + dt.timedelta(days=day)
-        client.post("/api/v1/encounters", {
-            "id": visit_id, "patient_id": SERIES_PATIENT_ID, "mode": "emergency" if day == 0 else "consultation",
-            "time_of_injury": (first - dt.timedelta(hours=3)).isoformat(), "time_of_arrival": arrival.isoformat(),
-            "clinician": "Dr. Demo", "facility": "Demo field clinic"}, f"record the day-{day} visit")  # fmt: skip
-    return VISIT_IDS
-
-
-def _exists(client: GatewayClient, path: str) -> bool:
-    try:
-        client.get(path, "read")
-        return True
-    except GatewayError as exc:
-        if exc.http_status != 404:
-            raise
-        return False
+def visit_arrivals(client: GatewayClient) -> list[tuple[str, dt.datetime]]:
+    """The demo patient's four visits (recorded by the demo's seeding) and when each began, read as the phone
+    reads them."""
+    visits = []
+    for visit_id in VISIT_IDS:
+        encounter = client.get(f"/api/v1/encounters/{visit_id}", "read the visit")
+        visits.append((visit_id, dt.datetime.fromisoformat(encounter["data"]["time_of_arrival"])))
+    return visits
 
 
 def analyse_series(client: GatewayClient, series: Path, options: SeriesOptions, bar: ProgressBar) -> list[dict]:
     """Upload each visit's photos, ask for its analysis, follow them all; returns the finished jobs."""
     jobs = []
-    for day, visit_id in zip(SERIES_DAYS, record_visits(client), strict=True):
+    for day, (visit_id, arrival) in zip(SERIES_DAYS, visit_arrivals(client), strict=True):
         session = series / f"session_day{day:02d}"
         photos = sorted((session / "images").glob("*.jpg"))
         assets = {}
         for i, photo in enumerate(photos, 1):
-            upload = client.upload(photo, visit_id)
+            # As a phone would: each photo says when it was taken (a few minutes after the arrival, on its day).
+            taken = (arrival + dt.timedelta(minutes=10, seconds=20 * i)).astimezone()
+            upload = client.upload(photo, visit_id, data=with_capture_time(photo.read_bytes(), taken))
             assets[photo.stem] = upload["asset"]
             bar.line(f"day {day:>2}: uploaded {i}/{len(photos)} photos", final=i == len(photos))
         request: dict = {"assets": [a["id"] for a in assets.values()]}
@@ -142,8 +126,9 @@ def analyse_series(client: GatewayClient, series: Path, options: SeriesOptions, 
     finished = []
     for day, job in jobs:
         last = client.follow(job["id"], lambda e, d=day: bar.update(f"day {d:>2}", e))
-        bar.done(f"day {day:>2}", last)
-        finished.append(client.get(f"/api/v1/analyses/{job['id']}", "read the analysis"))
+        job = client.get(f"/api/v1/analyses/{job['id']}", "read the analysis")
+        bar.done(f"day {day:>2}", last, job.get("history", []))
+        finished.append(job)
     return finished
 
 

@@ -134,6 +134,9 @@ class AnalysisResult(Frozen):
     confidence: ConfidenceRecord | None = None
     scale: ScaleSummary | None = None
     timings_s: dict[str, float] = msgspec.field(default_factory=dict)
+    """Seconds per stage; for a stage in reused_stages, the time it took when it was made."""
+    reused_stages: list[str] = msgspec.field(default_factory=list)
+    """Stages an earlier try or run had finished, reused as they were (a retry resumes after a crash)."""
     hours_since_injury: float | None = None
     provisional: bool | None = None
     """True when the photos were taken less than 72 h after the injury (burns evolve: re-measure later); None when

@@ -102,7 +102,9 @@ class CaptureMetadata(Frozen, omit_defaults=True):
     """What the file says about how it was taken (EXIF or the video container)."""
 
     captured_at: str | None = None
-    """As the camera wrote it (EXIF DateTimeOriginal has no time zone)."""
+    """As the camera wrote it (EXIF DateTimeOriginal has no time zone: see captured_offset)."""
+    captured_offset: str | None = None
+    """EXIF OffsetTimeOriginal ('+02:00'), when the camera wrote one."""
     camera_make: str | None = None
     camera_model: str | None = None
     focal_length_mm: float | None = None

@@ -227,6 +227,9 @@ class ReconstructionConfig(Message):
     """Finest cell of the Poisson surface, in mm (model units when the scale is unknown)."""
     mesh_density_quantile: Annotated[float, msgspec.Meta(ge=0, lt=1)] = 0.04
     """Surface parts supported by the fewest points (this share) are trimmed away."""
+    mesh_threads: Annotated[int, msgspec.Meta(ge=-1, le=64)] = 1
+    """Threads of the Poisson meshing (-1: all cores). One: with several, Open3D's PoissonRecon now and then dies
+    of SIGSEGV (Open3D issues #6828 and #7229; it did once in the demo); benchmarks/mesh_stress.py counts them."""
 
 
 class AnalysisConfig(Message):

@@ -8,6 +8,7 @@ finished stage.
 from __future__ import annotations
 
 import enum
+import re
 from typing import Annotated
 
 import msgspec
@@ -30,6 +31,58 @@ class JobState(enum.StrEnum):
 
 
 FINISHED = frozenset({JobState.done, JobState.failed, JobState.cancelled})
+
+
+class CaptureTimeSource(enum.StrEnum):
+    camera = "camera"
+    """The pictures' own clock: EXIF DateTimeOriginal, or a video's creation time."""
+    upload = "upload"
+    """When the gateway received the pictures: they carry no plausible time of their own."""
+
+
+class CaptureTime(Frozen):
+    """When a visit's pictures were taken: the analysis counts the hours since injury to it."""
+
+    at: str
+    """ISO 8601, UTC: the earliest picture's (a later one would make the burn look older than it is)."""
+    source: CaptureTimeSource
+    detail: str
+    """What the pictures said, for people: e.g. 'camera clock of 8 of 8 pictures'."""
+
+
+class AttemptOutcome(enum.StrEnum):
+    running = "running"
+    done = "done"
+    """The analysis finished (its result may still be 'failed': the capture could not be measured)."""
+    failed = "failed"
+    """Bad input or data: not tried again."""
+    crashed = "crashed"
+    """The process died or stopped on an unexpected error: tried again from its last finished stage."""
+    hung = "hung"
+    lost = "lost"
+    """Its worker died or lost the lease."""
+    handed_back = "handed_back"
+    """Its worker was stopped: queued again at once, not counted as a try."""
+    cancelled = "cancelled"
+
+
+class JobAttempt(Frozen):
+    """One try of an analysis job (GET /api/v1/analyses/{id}/attempts)."""
+
+    attempt: int
+    started_at: str
+    outcome: AttemptOutcome
+    ended_at: str | None = None
+    stage: str = ""
+    """The stage it was in when it ended."""
+    resumed_from: str = ""
+    """The stage it started at ('' for the first: from the beginning)."""
+    exit: str = ""
+    """How its process ended: 'exit code 1', 'SIGSEGV', ... ('' while running or when it ended normally)."""
+    reason: str = ""
+    """Why it ended, in words."""
+    log_tail: str = ""
+    """The last lines its process wrote (native crashes print only there)."""
 
 
 class MaskInput(Frozen):
@@ -102,6 +155,11 @@ class AnalysisJob(Frozen):
     """1 = next to run; None unless queued."""
     result_status: str | None = None
     """Once done: 'ok' (measured in mm and cm) or 'unscaled'; 'failed' when the capture could not be measured."""
+    captured: CaptureTime | None = None
+    """When the pictures were taken (None for jobs an older gateway queued)."""
+    history: list[str] = msgspec.field(default_factory=list)
+    """How each earlier try ended, in words ('try 1 ended by SIGSEGV in the mesh stage; retried from mesh');
+    the details are at /attempts."""
 
 
 class JobEvent(Frozen):
@@ -128,6 +186,8 @@ class BurnAnalysis(Frozen):
     completed_at: str
     result: AnalysisResult
     """The measurement with its confidence, scale, provenance and notes; decision support only."""
+    captured: CaptureTime | None = None
+    """When the pictures were taken: result.hours_since_injury counts to it."""
 
 
 class PictureRef(Frozen):
@@ -137,6 +197,14 @@ class PictureRef(Frozen):
     sha256: str
     suffix: str
     """File suffix for its media type (.jpg, .png, .heic)."""
+    filename: str = ""
+    """The name the phone gave (for people: the analysis names its files after it, with the asset id's end)."""
+
+    @property
+    def stem(self) -> str:
+        """The name of its files in the analysis: 'view_003-1a2b3c4d', or the asset id for jobs without a name."""
+        name = re.sub(r"[^A-Za-z0-9_-]+", "_", self.filename.rsplit(".", 1)[0]).strip("_")[:40]
+        return f"{name}-{self.asset_id[-8:]}" if name else self.asset_id
 
 
 class JobInputs(Frozen):
@@ -147,3 +215,5 @@ class JobInputs(Frozen):
     ruler: RulerInput | None = None
     marker_side_mm: float | None = None
     requested_at: str = ""
+    captured: CaptureTime | None = None
+    """None in jobs queued before capture times were kept: the hours since injury then count to requested_at."""

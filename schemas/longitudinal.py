@@ -70,7 +70,7 @@ class TrackSession(Frozen):
     label: str
     """Name of the visit (e.g. the session folder)."""
     analysis: str
-    """The visit's analysis folder."""
+    """The visit's analysis folder (`burnedge track`); from the gateway's API, its link (/api/v1/analyses/{id})."""
     status: str
     """The analysis status: 'ok', 'unscaled', 'failed', or 'missing' (no analysis.json)."""
     baseline: bool = False

@@ -121,7 +121,8 @@ class StageTiming(Frozen):
     stage: str
     seconds: float
     resumed: bool = False
-    """True when the stage's artifact was already there and the stage was skipped."""
+    """True when the stage's artifact was already there and the stage was skipped: `seconds` is then the time it
+    took when it was made (0 for artifacts made before durations were kept)."""
 
 
 class ReconstructionReport(Frozen):

@@ -4,6 +4,7 @@ patient's record, cancel, and SIGKILL of a worker or of the whole gateway in the
 from __future__ import annotations
 
 import base64
+import datetime as dt
 import os
 import signal
 import time
@@ -12,6 +13,7 @@ from pathlib import Path
 import pytest
 
 from gateway.demo_client import GatewayClient
+from processing.capture.stamp import with_capture_time
 from tests.conftest import GatewayProcess, add_user_cli, encounter_body, free_port, login, patient_body
 from tests.phantom_helpers import SMALL, render_small_patch
 
@@ -80,12 +82,20 @@ def phone(gateway) -> GatewayClient:
     client.close()
 
 
-def new_visit(phone: GatewayClient, phantom: Path, *, mode: str = "emergency") -> tuple[str, dict[str, str]]:
+def new_visit(phone: GatewayClient, phantom: Path, *, mode: str = "emergency", injury_hours_ago: float = 3,
+              taken_hours_after_injury: float | None = None) -> tuple[str, dict[str, str]]:  # fmt: skip
+    """A patient and a visit with the phantom's photos uploaded (stamped by their camera when `taken_...`)."""
     p = patient_body()
     phone.post("/api/v1/patients", p, "patient")
-    e = encounter_body(p["id"], mode=mode)
+    e = encounter_body(p["id"], mode=mode, injury_hours_ago=injury_hours_ago)
     phone.post("/api/v1/encounters", e, "encounter")
-    assets = {f.stem: phone.upload(f, e["id"])["asset"]["id"] for f in sorted((phantom / "images").glob("*.jpg"))}
+    assets = {}
+    for f in sorted((phantom / "images").glob("*.jpg")):
+        data = f.read_bytes()
+        if taken_hours_after_injury is not None:
+            taken = dt.datetime.fromisoformat(e["time_of_injury"]) + dt.timedelta(hours=taken_hours_after_injury)
+            data = with_capture_time(data, taken.astimezone(dt.timezone(dt.timedelta(hours=3))))
+        assets[f.stem] = phone.upload(f, e["id"], data=data)["asset"]["id"]
     return e["id"], assets
 
 
@@ -100,8 +110,9 @@ def job(phone: GatewayClient, job_id: str) -> dict:
 
 @pytest.fixture(scope="module")
 def uninterrupted(phone, phantom) -> tuple[dict, list[dict], dict]:
-    """One analysis followed from request to result over server-sent events: (job, events, result)."""
-    enc, assets = new_visit(phone, phantom)
+    """One analysis followed from request to result over server-sent events: (job, events, result). The photos were
+    taken 3 h after the injury and are analysed 20 days later."""
+    enc, assets = new_visit(phone, phantom, injury_hours_ago=20 * 24 + 3, taken_hours_after_injury=3)
     requested = phone.post(f"/api/v1/encounters/{enc}/analyses", true_masks(phantom, assets), "request")
     events: list[dict] = []
     last = phone.follow(requested["id"], events.append)
@@ -120,7 +131,15 @@ def test_progress_arrives_as_server_sent_events_and_the_result_is_stored(uninter
     assert result["status"] == "ok" and result["confidence"]["clinician_masks"] == SMALL["views"]
     truth = __import__("json").loads((phantom / "ground_truth.json").read_text())
     assert result["metrics"]["area_cm2"] == pytest.approx(truth["burn_area_cm2"], rel=0.04)
-    assert result["provisional"] is True  # photos taken 3 h after the injury
+    # The photos' camera clock says 3 h after the injury: provisional, though analysed 20 days later.
+    assert result["provisional"] is True and result["hours_since_injury"] == pytest.approx(3.0, abs=0.01)
+    assert (
+        finished["captured"]["source"] == "camera"
+        and finished["captured"]["detail"] == f"camera clock of {SMALL['views']} of {SMALL['views']} pictures"
+    )
+    assert finished["history"] == []
+    [attempt] = phone.get(f"/api/v1/analyses/{finished['id']}/attempts", "attempts")
+    assert attempt["outcome"] == "done" and attempt["attempt"] == 1 and attempt["resumed_from"] == ""
     assert result["metrics"]["tbsa_percent"] > 0  # height and weight came from the patient's record
 
 
@@ -139,6 +158,17 @@ def test_the_result_is_in_the_patients_record_and_its_files_download(uninterrupt
     assert phone.http.get(f"/api/v1/analyses/{finished['id']}/artifacts/sfm/database.db").status_code == 404
 
 
+def test_the_healing_track_links_the_analysis_and_shows_no_server_paths(uninterrupted, phone, gateway):
+    finished, _, result = uninterrupted
+    url = f"/api/v1/patients/{finished['patient_id']}/healing"
+    wait_for(lambda: phone.http.get(url).status_code == 200, 60, "the healing track")
+    response = phone.http.get(url)
+    [visit] = response.json()["sessions"]
+    assert visit["analysis"] == f"/api/v1/analyses/{finished['id']}" and visit["label"] == "day 0"
+    assert visit["day"] == pytest.approx(result["hours_since_injury"] / 24, abs=0.01)  # the analysis and track agree
+    assert str(gateway.db.parent) not in response.text and '"/tmp' not in response.text
+
+
 def test_a_worker_killed_mid_reconstruction_resumes_and_gives_the_same_metrics(uninterrupted, gateway, phone, phantom):
     _, _, reference = uninterrupted
     enc, assets = new_visit(phone, phantom)
@@ -152,12 +182,46 @@ def test_a_worker_killed_mid_reconstruction_resumes_and_gives_the_same_metrics(u
     assert last["state"] == "done", last
     finished = job(phone, requested["id"])
     assert finished["attempts"] == 2
+    assert finished["history"] == ["try 1 lost its worker (killed, power cut or out of memory) in the dense stage; "
+                                   "retried from dense"]  # fmt: skip
+    first, second = phone.get(f"/api/v1/analyses/{requested['id']}/attempts", "attempts")
+    assert (first["outcome"], first["stage"], second["outcome"], second["resumed_from"]) == ("lost", "dense", "done",
+                                                                                          "dense")  # fmt: skip
     result = phone.get(f"/api/v1/analyses/{requested['id']}/result", "result")
-    assert result["timings_s"]["sfm"] == 0.0  # resumed: SfM was not run again
+    # Resumed: SfM was not run again; its time is the one it took in the first try.
+    assert "sfm" in result["reused_stages"] and result["timings_s"]["sfm"] > 0
+    assert "dense" not in result["reused_stages"]
     for name in ("area_cm2", "perimeter_cm", "relief_max_mm", "volume_cm3"):
         assert result["metrics"][name] == pytest.approx(reference["metrics"][name], rel=0.01), name
     feed = phone.get("/api/v1/sync/changes?since=0&limit=500", "change feed")
     assert sum(c["meta"]["id"] == requested["id"] for c in feed["changes"]) == 1  # stored once
+
+
+def test_a_native_crash_of_the_analysis_is_retried_and_said(gateway, phone, phantom):
+    """SIGSEGV in the analysis process (as Open3D once did in meshing): the queue retries from that stage, and the
+    job, its attempts and the worker's log say what happened, with the Python stack that led into it."""
+    enc, assets = new_visit(phone, phantom)
+    requested = phone.post(f"/api/v1/encounters/{enc}/analyses", true_masks(phantom, assets), "request")
+    at_stage(phone, requested["id"], "dense")
+    [worker] = children(gateway.proc.pid)
+    [analysis] = children(worker)
+    os.kill(analysis, signal.SIGSEGV)
+    last = GatewayClient.follow(phone, requested["id"], lambda e: None)
+    assert last["state"] == "done", last
+    said = "try 1 ended by SIGSEGV in the dense stage"
+    finished = job(phone, requested["id"])
+    assert finished["history"] == [f"{said}; retried from dense"] and finished["error"] is None
+    crashed, done = phone.get(f"/api/v1/analyses/{requested['id']}/attempts", "attempts")
+    assert (crashed["outcome"], crashed["exit"], crashed["stage"]) == ("crashed", "SIGSEGV", "dense")
+    assert (
+        "Segmentation fault" in crashed["log_tail"] and "File " in crashed["log_tail"]
+    )  # faulthandler: the Python stack
+    assert "SIGSEGV" in crashed["log_tail"]  # COLMAP glog: the native one
+    assert "/site-packages/" not in crashed["log_tail"] and str(gateway.db.parent) not in crashed["log_tail"]
+    assert done["outcome"] == "done" and done["resumed_from"] == "dense"
+    assert said in gateway.log.read_text(errors="replace") and "Segmentation fault" in gateway.log.read_text(
+        errors="replace"
+    )
 
 
 def test_cancelling_a_running_analysis_stops_its_process(gateway, phone, phantom):

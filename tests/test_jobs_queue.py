@@ -83,7 +83,7 @@ def test_a_crash_is_retried_after_a_backoff(tmp_path):
     queue = JobQueue(db, msgspec.structs.replace(FAST, retry_base_s=30.0, max_attempts=3))
     job = enqueue(queue, 1)
     claim = queue.claim("w")
-    assert queue.retry_or_fail(claim, "it stopped on an unexpected error (boom)") is JobState.queued
+    assert queue.retry_or_fail(claim, "stopped on an unexpected error (boom)") is JobState.queued
     waiting = queue.get(job)
     assert waiting.state is JobState.queued and "boom" in waiting.error
     assert waiting.next_attempt_at > iso(utcnow()) and queue.claim("w") is None  # not before the backoff
@@ -171,3 +171,25 @@ def test_retention_keeps_a_finished_analysis_results_and_drops_its_scratch(tmp_p
     assert (job_dir(config, recent) / "source/a.jpg").exists()
     assert clean_up(db, config) == 0  # each job is cleaned once
     db.close()
+
+
+def test_every_try_is_recorded_with_how_it_ended_and_where_the_retry_resumes(queue):
+    job = enqueue(queue, 1)
+    first = queue.claim("w")
+    queue.progress(first, "mesh", 0.62, "meshing the surface")
+    state = queue.retry_or_fail(
+        first, "ended by SIGSEGV", exit="SIGSEGV", log_tail="Fatal Python error: Segmentation fault"
+    )
+    waiting = queue.get(job)
+    assert state is JobState.queued and waiting.error == "try 1 ended by SIGSEGV in the mesh stage"
+    assert waiting.message == "try 1 ended by SIGSEGV in the mesh stage; retrying from mesh"
+    second = queue.claim("w")
+    with queue.db.write() as conn:
+        assert queue.finish_in(conn, second, JobState.done, result_status="ok", error=None, message="finished")
+    crashed, done = queue.attempt_history(job)
+    assert (crashed.attempt, crashed.outcome, crashed.exit, crashed.stage) == (1, "crashed", "SIGSEGV", "mesh")
+    assert "Segmentation fault" in crashed.log_tail and crashed.ended_at is not None
+    assert (done.attempt, done.outcome, done.resumed_from) == (2, "done", "mesh")
+    assert queue.get(job).history == ["try 1 ended by SIGSEGV in the mesh stage; retried from mesh"]
+    with pytest.raises(NotFound):
+        queue.attempt_history(uuid7())

@@ -15,7 +15,7 @@ from gateway.controllers.common import IdPath
 from gateway.controllers.problems import BODY, ONE, problems
 from gateway.dependencies import AuthedRequest, ServicesDep
 from schemas.analysis import AnalysisResult
-from schemas.jobs import FINISHED, AnalysisJob, AnalysisRequest, JobEvent
+from schemas.jobs import FINISHED, AnalysisJob, AnalysisRequest, JobAttempt, JobEvent
 from schemas.longitudinal import TrackResult
 
 EVENT_POLL_S = 0.5
@@ -51,6 +51,12 @@ class AnalysisController(Controller):
          responses=problems(*ONE))  # fmt: skip
     def read(self, job_id: IdPath, request: AuthedRequest, services: ServicesDep) -> AnalysisJob:
         return services.analyses.get(request.user, job_id)
+
+    @get("/analyses/{job_id:str}/attempts", sync_to_thread=False,
+         summary="Every try of an analysis: how it ended (exit code or signal, stage, reason) and its log's end",
+         responses=problems(*ONE))  # fmt: skip
+    def attempts(self, job_id: IdPath, request: AuthedRequest, services: ServicesDep) -> list[JobAttempt]:
+        return services.analyses.attempts(request.user, job_id)
 
     @post("/analyses/{job_id:str}/cancel", sync_to_thread=True, status_code=200, summary="Cancel an analysis",
           responses=problems(*ONE, 409))  # fmt: skip

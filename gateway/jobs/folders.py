@@ -4,6 +4,7 @@ WORK/<job id>/source/<asset id>.<ext>     the pictures, linked from the media st
 WORK/<job id>/masks/<asset id>.png|.json  a clinician's masks or outlines
 WORK/<job id>/ruler.json                  ruler points, when given
 WORK/<job id>/analysis/                   the analysis folder (processing/analysis/pipeline.py)
+WORK/<job id>/logs/try-<n>.log            what each try's process wrote (native crashes print only there)
 WORK/patients/<patient id>/               the patient's healing track (track.json)
 """
 
@@ -11,9 +12,11 @@ from __future__ import annotations
 
 import datetime as dt
 import logging
+import re
 import shutil
 from pathlib import Path
 
+from gateway.storage.blobs import media_root
 from gateway.storage.database import Database
 from schemas.base import iso, utcnow
 from schemas.config import Config
@@ -99,3 +102,13 @@ def clean_up(db: Database, config: Config) -> int:
         log.info("analysis %s (%s): work files past the %g-day retention removed", row["id"], row["state"],
                  config.jobs.retention_days)  # fmt: skip
     return len(rows)
+
+
+_SITE_PACKAGES = re.compile(r"(?:/[^\s\"':]+)+/site-packages/")
+
+
+def without_server_paths(config: Config, text: str) -> str:
+    """`text` (a log) with the gateway's folders and its Python installation's paths shortened, for the API."""
+    text = text.replace(str(work_root(config)), "<analyses>").replace(str(media_root(config)), "<media>")
+    text = _SITE_PACKAGES.sub("<python>/", text)
+    return text.replace(str(Path(__file__).resolve().parents[2]) + "/", "")

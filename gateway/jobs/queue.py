@@ -13,13 +13,18 @@ import random
 import sqlite3
 from dataclasses import dataclass
 
+import msgspec
+
+from gateway.jobs import attempts
 from gateway.storage.database import Database
 from schemas.base import iso, utcnow
 from schemas.config import JobsConfig
 from schemas.errors import Conflict, NotFound
-from schemas.jobs import FINISHED, AnalysisJob, JobState
+from schemas.jobs import FINISHED, AnalysisJob, AttemptOutcome, CaptureTime, JobAttempt, JobState
 
-WORKER_DIED = "its worker stopped before finishing (killed, power cut or out of memory)"
+WORKER_DIED = "lost its worker (killed, power cut or out of memory)"
+_ENDED = {JobState.done: AttemptOutcome.done, JobState.failed: AttemptOutcome.failed,
+          JobState.cancelled: AttemptOutcome.cancelled}  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -65,7 +70,7 @@ class JobQueue:
         with self.db.write() as conn:
             self._reap(conn, now)
             row = conn.execute(
-                "SELECT id, attempts FROM analysis_jobs WHERE state = 'queued' AND next_attempt_at <= ?"
+                "SELECT id, attempts, stage FROM analysis_jobs WHERE state = 'queued' AND next_attempt_at <= ?"
                 " ORDER BY priority, created_at LIMIT 1",
                 (_at(now),),
             ).fetchone()
@@ -77,6 +82,7 @@ class JobQueue:
                 (owner, _at(now + dt.timedelta(seconds=self.conf.lease_s)), _at(now),
                  f"starting (try {row['attempts'] + 1} of {self.conf.max_attempts})", row["id"]),
             )  # fmt: skip
+            attempts.begin(conn, row["id"], row["attempts"] + 1, _at(now), row["stage"])
             return Claim(row["id"], owner, row["attempts"] + 1)
 
     def heartbeat(self, claim: Claim) -> Beat:
@@ -110,40 +116,51 @@ class JobQueue:
             " WHERE id = ? AND state = 'running' AND lease_owner = ?",
             (state.value, result_status, error, message, _at(_now()), state.value, claim.job_id, claim.owner),
         )
-        return cur.rowcount == 1
+        if cur.rowcount != 1:
+            return False
+        stage = conn.execute("SELECT stage FROM analysis_jobs WHERE id = ?", (claim.job_id,)).fetchone()[0]
+        attempts.end(conn, claim.job_id, _ENDED[state], _at(_now()), stage=stage, reason=error or message)
+        return True
 
     def finish(self, claim: Claim, state: JobState, *, error: str | None, message: str) -> bool:
         with self.db.write() as conn:
             return self.finish_in(conn, claim, state, result_status=None, error=error, message=message)
 
-    def retry_or_fail(self, claim: Claim, reason: str) -> JobState:
-        """After a crash of this try: queue it again with backoff, or fail it when the tries are used up."""
+    def retry_or_fail(self, claim: Claim, reason: str, *, outcome: AttemptOutcome = AttemptOutcome.crashed,
+                      exit: str = "", log_tail: str = "") -> JobState:  # fmt: skip
+        """After a crash of this try: queue it again with backoff, or fail it when the tries are used up.
+        `reason` completes 'try 2 ...', e.g. 'ended by SIGSEGV'."""
         with self.db.write() as conn:
             row = conn.execute(
-                "SELECT attempts, max_attempts, cancel_requested FROM analysis_jobs WHERE id = ? AND state = 'running'"
-                " AND lease_owner = ?",
+                "SELECT attempts, max_attempts, cancel_requested, stage FROM analysis_jobs WHERE id = ?"
+                " AND state = 'running' AND lease_owner = ?",
                 (claim.job_id, claim.owner),
             ).fetchone()
             if row is None:
                 return JobState.running  # lost meanwhile: its new holder decides
-            return self._after_try(conn, claim.job_id, row, reason, _now())
+            return self._after_try(conn, claim.job_id, row, reason, _now(), outcome, exit, log_tail)
 
-    def _after_try(self, conn, job_id: str, row, reason: str, now: dt.datetime) -> JobState:
+    def _after_try(self, conn, job_id: str, row, reason: str, now: dt.datetime,
+                   outcome: AttemptOutcome = AttemptOutcome.lost, exit: str = "", log_tail: str = "") -> JobState:  # fmt: skip
+        stage = row["stage"]
+        ended = f"try {row['attempts']} {reason}" + (f" in the {stage} stage" if stage else "")
+        attempts.end(conn, job_id, outcome, _at(now), stage=stage, reason=reason, exit=exit, log_tail=log_tail)
         if row["cancel_requested"]:
-            state, error, when = JobState.cancelled, None, now
+            state, error, when, message = JobState.cancelled, None, now, "cancelled"
         elif row["attempts"] >= row["max_attempts"]:
-            state, when = JobState.failed, now
-            error = f"the analysis failed {row['attempts']} times; the last time {reason}. The pictures are kept: " \
-                    "ask your IT contact to look at the gateway's log"  # fmt: skip
+            state, when, message = JobState.failed, now, "failed"
+            error = (
+                f"the analysis failed {row['attempts']} times; the last time: {ended}. The pictures are kept: "
+                f"ask your IT contact to look at the gateway's log and /api/v1/analyses/{job_id}/attempts"
+            )
         else:
-            state, error = JobState.queued, reason
+            state, error = JobState.queued, ended
             when = now + dt.timedelta(seconds=self.backoff_s(row["attempts"]))
+            message = f"{ended}; retrying from {stage or 'the start'}"
         conn.execute(
             "UPDATE analysis_jobs SET state = ?, error = ?, next_attempt_at = ?, lease_owner = NULL,"
             " lease_expires_at = NULL, finished_at = ?, message = ? WHERE id = ?",
-            (state.value, error, _at(when), _at(now) if state in FINISHED else None,
-             {"queued": f"waiting to try again ({reason})", "failed": "failed", "cancelled": "cancelled"}[state.value],
-             job_id),
+            (state.value, error, _at(when), _at(now) if state in FINISHED else None, message, job_id),
         )  # fmt: skip
         return state
 
@@ -158,6 +175,9 @@ class JobQueue:
                 " AND lease_owner = ?",
                 (_at(_now()), _at(_now()), claim.job_id, claim.owner),
             )
+            row = conn.execute("SELECT stage FROM analysis_jobs WHERE id = ?", (claim.job_id,)).fetchone()
+            attempts.end(conn, claim.job_id, AttemptOutcome.handed_back, _at(_now()), stage=row["stage"] if row else "",
+                         reason="was handed back: its worker was stopping")  # fmt: skip
 
     # the gateway ---------------------------------------------------------------------------------------------
     def reap(self) -> int:
@@ -167,7 +187,7 @@ class JobQueue:
 
     def _reap(self, conn, now: dt.datetime) -> int:
         rows = conn.execute(
-            "SELECT id, attempts, max_attempts, cancel_requested FROM analysis_jobs WHERE state = 'running'"
+            "SELECT id, attempts, max_attempts, cancel_requested, stage FROM analysis_jobs WHERE state = 'running'"
             " AND lease_expires_at < ?",
             (_at(now),),
         ).fetchall()
@@ -204,14 +224,21 @@ class JobQueue:
             row = conn.execute("SELECT * FROM analysis_jobs WHERE id = ?", (job_id,)).fetchone()
             if row is None:
                 raise NotFound(f"no analysis {job_id}")
-            return job_from_row(row, _position(conn, row))
+            return job_from_row(row, _position(conn, row), attempts.summaries(conn, job_id))
 
     def for_encounter(self, encounter_id: str) -> list[AnalysisJob]:
         with self.db.read() as conn:
             rows = conn.execute(
                 "SELECT * FROM analysis_jobs WHERE encounter_id = ? ORDER BY created_at", (encounter_id,)
             ).fetchall()
-            return [job_from_row(r, _position(conn, r)) for r in rows]
+            return [job_from_row(r, _position(conn, r), attempts.summaries(conn, r["id"])) for r in rows]
+
+    def attempt_history(self, job_id: str) -> list[JobAttempt]:
+        """Every try of the job, oldest first."""
+        with self.db.read() as conn:
+            if conn.execute("SELECT 1 FROM analysis_jobs WHERE id = ?", (job_id,)).fetchone() is None:
+                raise NotFound(f"no analysis {job_id}")
+            return attempts.history(conn, job_id)
 
     def live_states(self) -> dict[str, int]:
         rows = self.db.connection().execute("SELECT state, count(*) AS n FROM analysis_jobs GROUP BY state")
@@ -229,7 +256,7 @@ def _position(conn, row) -> int | None:
     return ahead + 1
 
 
-def job_from_row(row, position: int | None = None) -> AnalysisJob:
+def job_from_row(row, position: int | None = None, history: list[str] | None = None) -> AnalysisJob:
     state = JobState(row["state"])
     return AnalysisJob(
         id=row["id"], encounter_id=row["encounter_id"], patient_id=row["patient_id"], state=state,
@@ -238,5 +265,6 @@ def job_from_row(row, position: int | None = None) -> AnalysisJob:
         next_attempt_at=row["next_attempt_at"] if state is JobState.queued else None, error=row["error"],
         cancel_requested=bool(row["cancel_requested"]), pictures=row["pictures"], created_at=row["created_at"],
         created_by=row["created_by"], started_at=row["started_at"], finished_at=row["finished_at"],
-        queue_position=position, result_status=row["result_status"],
+        queue_position=position, result_status=row["result_status"], history=history or [],
+        captured=msgspec.json.decode(row["captured"], type=CaptureTime) if row["captured"] else None,
     )  # fmt: skip

@@ -15,11 +15,13 @@ import os
 import shutil
 import signal
 import time
+import traceback
 from pathlib import Path
 
 import msgspec
 
 from gateway.jobs import folders
+from gateway.jobs.capture_time import hours_since_injury
 from gateway.jobs.queue import Claim, JobQueue
 from gateway.jobs.timeline import update_track
 from gateway.storage import audit
@@ -33,7 +35,7 @@ from schemas.analysis import AnalysisResult, AnalysisStatus
 from schemas.base import iso, utcnow
 from schemas.config import Config
 from schemas.errors import BurnedgeError, StorageError
-from schemas.jobs import BurnAnalysis, JobInputs, JobState
+from schemas.jobs import BurnAnalysis, CaptureTime, CaptureTimeSource, JobInputs, JobState
 from schemas.reconstruction import RulerMark, RulerPoints
 from schemas.records import RecordKind
 
@@ -90,7 +92,7 @@ def _lay_out(config: Config, folder: Path, inputs: JobInputs) -> tuple[Path, Pat
     source = folder / "source"
     source.mkdir(parents=True, exist_ok=True)
     for picture in inputs.pictures:
-        target = source / f"{picture.asset_id}{picture.suffix}"
+        target = source / f"{picture.stem}{picture.suffix}"
         if not target.exists():
             tmp = target.with_name(target.name + ".tmp")
             tmp.unlink(missing_ok=True)
@@ -99,32 +101,35 @@ def _lay_out(config: Config, folder: Path, inputs: JobInputs) -> tuple[Path, Pat
             except OSError:  # work_dir on another file system
                 shutil.copyfile(store.blob(picture.sha256), tmp)
             os.replace(tmp, target)
+    stems = {p.asset_id: p.stem for p in inputs.pictures}
     masks = None
     if inputs.masks:
         masks = folder / "masks"
         masks.mkdir(exist_ok=True)
         for mask in inputs.masks:
             if mask.png_base64:
-                (masks / f"{mask.asset_id}.png").write_bytes(base64.b64decode(mask.png_base64))
+                (masks / f"{stems[mask.asset_id]}.png").write_bytes(base64.b64decode(mask.png_base64))
             else:
-                write_json(masks / f"{mask.asset_id}.json", {"polygons": mask.polygons})
+                write_json(masks / f"{stems[mask.asset_id]}.json", {"polygons": mask.polygons})
     ruler = None
     if inputs.ruler is not None:
-        names = {p.asset_id: f"{p.asset_id}{p.suffix}" for p in inputs.pictures}
+        names = {p.asset_id: f"{p.stem}{p.suffix}" for p in inputs.pictures}
         ruler = RulerPoints(distance_mm=inputs.ruler.distance_mm,
                             marks=[RulerMark(image=names[m.asset_id], a=m.a, b=m.b) for m in inputs.ruler.marks])  # fmt: skip
     return source, masks, ruler
 
 
 def _patient(db: Database, encounter_id: str, inputs: JobInputs) -> Patient:
-    """What the analysis may know: hours since injury (at the request), height and weight for %TBSA."""
+    """What the analysis may know: hours since injury (to when the pictures were taken), height and weight for
+    %TBSA."""
     conn = db.connection()
     encounter = store.get_head(conn, RecordKind.encounter, encounter_id).data
     patient = store.get_head(conn, RecordKind.patient, encounter["patient_id"]).data
     hours = None
-    if encounter.get("time_of_injury") and inputs.requested_at:
-        injured = dt.datetime.fromisoformat(encounter["time_of_injury"])
-        hours = max(0.0, (dt.datetime.fromisoformat(inputs.requested_at) - injured).total_seconds() / 3600)
+    captured = inputs.captured or (CaptureTime(at=inputs.requested_at, source=CaptureTimeSource.upload, detail="")
+                                   if inputs.requested_at else None)  # fmt: skip
+    if encounter.get("time_of_injury") and captured is not None:
+        hours = hours_since_injury(captured, dt.datetime.fromisoformat(encounter["time_of_injury"]))
     weight = encounter.get("weight_kg") or patient.get("weight_kg")
     height = patient.get("height_cm")
     if weight is None or height is None:
@@ -144,7 +149,8 @@ def _store(db: Database, queue: JobQueue, claim: Claim, row, inputs: JobInputs, 
             return JobState.running
         record = BurnAnalysis(encounter_id=row["encounter_id"], job_id=claim.job_id,
                               assets=[p.asset_id for p in inputs.pictures], requested_by=row["created_by"],
-                              requested_at=row["created_at"], completed_at=now, result=result)  # fmt: skip
+                              requested_at=row["created_at"], completed_at=now, captured=inputs.captured,
+                              result=result)  # fmt: skip
         audit.insert_server_record(conn, kind=RecordKind.burn_analysis, record_id=claim.job_id,
                                    parent_id=row["encounter_id"], data=msgspec.json.encode(record),
                                    action="analysis.store")  # fmt: skip
@@ -162,7 +168,7 @@ def child_main(config: Config, claim: Claim) -> None:
         state = run(config, claim)
     except BurnedgeError as exc:
         if isinstance(exc, StorageError):  # the database was busy: worth another try
-            _retry(config, claim, f"the database was busy ({exc.detail})")
+            _retry(config, claim, f"stopped: the database was busy ({exc.detail})")
             raise SystemExit(1) from exc
         # Bad input or data: trying again would fail the same way.
         log.error("analysis %s: %s", claim.job_id, exc.detail)
@@ -174,15 +180,20 @@ def child_main(config: Config, claim: Claim) -> None:
         return
     except Exception as exc:
         log.exception("analysis %s stopped on an unexpected error", claim.job_id)
-        _retry(config, claim, f"it stopped on an unexpected error ({type(exc).__name__}: {str(exc)[:300]})")
+        _retry(
+            config,
+            claim,
+            f"stopped on an unexpected error ({type(exc).__name__}: {str(exc)[:300]})",
+            traceback.format_exc(),
+        )
         raise SystemExit(1) from exc
     log.info("analysis %s: %s after %.1f s", claim.job_id, state.value, time.perf_counter() - started)
 
 
-def _retry(config: Config, claim: Claim, reason: str) -> None:
+def _retry(config: Config, claim: Claim, reason: str, log_tail: str = "") -> None:
     db = Database.from_config(config.gateway)
     try:
-        JobQueue(db, config.jobs).retry_or_fail(claim, reason)
+        JobQueue(db, config.jobs).retry_or_fail(claim, reason, exit="exit code 1", log_tail=log_tail)
     except StorageError:
         log.warning("analysis %s: the retry is left to the lease running out (database busy)", claim.job_id)
     finally:

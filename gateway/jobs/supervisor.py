@@ -33,7 +33,7 @@ class Workers:
         restarted = 0
         for i, process in enumerate(self.processes if not self.stopped else []):
             if not process.is_alive():
-                log.warning("analysis worker %d (pid %s) stopped with %s: restarting it", i, process.pid,
+                log.warning("analysis worker %d (pid %s) %s: restarting it", i, process.pid,
                             worker.describe_exit(process.exitcode))  # fmt: skip
                 process.join(timeout=0)
                 self.processes[i] = self._spawn(i)

@@ -17,6 +17,7 @@ from gateway.storage import records as store
 from gateway.storage.database import Database
 from schemas.config import Config
 from schemas.errors import NotFound
+from schemas.jobs import CaptureTime
 from schemas.longitudinal import TrackResult
 from schemas.records import RecordKind
 
@@ -25,21 +26,24 @@ TRACK = "track.json"
 
 
 def sessions(db: Database, config: Config, patient_id: str) -> list:
-    """The latest finished measurement of each of the patient's encounters, with its day since the injury."""
+    """The latest finished measurement of each of the patient's encounters, with its day since the injury counted
+    to when its pictures were taken (as the analysis counts its hours since injury)."""
     conn = db.connection()
     rows = conn.execute(
-        "SELECT id, encounter_id FROM analysis_jobs WHERE patient_id = ? AND state = 'done'"
+        "SELECT id, encounter_id, captured FROM analysis_jobs WHERE patient_id = ? AND state = 'done'"
         " AND result_status = 'ok' ORDER BY finished_at",
         (patient_id,),
     ).fetchall()
-    latest = {r["encounter_id"]: r["id"] for r in rows}  # a re-analysis of a visit replaces the earlier one
+    latest = {r["encounter_id"]: r for r in rows}  # a re-analysis of a visit replaces the earlier one
     visits = []
-    for encounter_id, job_id in latest.items():
+    for encounter_id, row in latest.items():
         encounter = store.find_head(conn, RecordKind.encounter, encounter_id)
         if encounter is None or encounter.meta.deleted:
             continue
         injury = encounter.data.get("time_of_injury")
-        visits.append((dt.datetime.fromisoformat(encounter.data["time_of_arrival"]), encounter_id, job_id,
+        # Jobs queued before capture times were kept: the visit's arrival stands in.
+        taken = msgspec.json.decode(row["captured"], type=CaptureTime).at if row["captured"] else None
+        visits.append((dt.datetime.fromisoformat(taken or encounter.data["time_of_arrival"]), row["id"],
                        dt.datetime.fromisoformat(injury) if injury else None))  # fmt: skip
     visits.sort()
     from processing.longitudinal.track import SessionAnalysis  # Open3D: only ever in a job's process
@@ -48,14 +52,11 @@ def sessions(db: Database, config: Config, patient_id: str) -> list:
         return []
     # Days since the injury when the first visit recorded it (the day-21 healing prompt counts from the injury),
     # else since the first visit.
-    start = visits[0][3] or visits[0][0]
+    start = visits[0][2] or visits[0][0]
+    days = [round(max(0.0, (at - start).total_seconds()) / 86400, 2) for at, _, _ in visits]
     return [
-        SessionAnalysis(
-            day=round((at - start).total_seconds() / 86400, 2),
-            label=f"encounter {encounter_id}",
-            analysis_dir=folders.analysis_dir(config, job_id),
-        )  # fmt: skip
-        for at, encounter_id, job_id, _ in visits
+        SessionAnalysis(day=day, label=f"day {day:.0f}", analysis_dir=folders.analysis_dir(config, job_id))
+        for day, (_, job_id, _) in zip(days, visits, strict=True)
     ]
 
 
@@ -73,7 +74,16 @@ def update_track(db: Database, config: Config, patient_id: str) -> Path | None:
 
 
 def read_track(config: Config, patient_id: str) -> TrackResult:
+    """The stored track as the API serves it: each visit's analysis as its API link, not the gateway's folder."""
     path = folders.patient_dir(config, patient_id) / TRACK
     if not path.exists():
         raise NotFound(f"patient {patient_id} has no measured visit yet: the track starts with the first analysis")
-    return msgspec.json.decode(path.read_bytes(), type=TrackResult)
+    track = msgspec.json.decode(path.read_bytes(), type=TrackResult)
+    linked = [msgspec.structs.replace(s, analysis=_link(s.analysis)) for s in track.sessions]
+    return msgspec.structs.replace(track, sessions=linked)
+
+
+def _link(folder: str) -> str:
+    """work_dir/<job id>/analysis -> /api/v1/analyses/<job id>."""
+    path = Path(folder)
+    return f"/api/v1/analyses/{path.parent.name}" if path.name == "analysis" else ""

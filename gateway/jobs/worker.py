@@ -8,6 +8,7 @@ running job back to the queue at once, to be resumed from its last finished stag
 
 from __future__ import annotations
 
+import faulthandler
 import logging
 import multiprocessing
 import os
@@ -16,25 +17,34 @@ import socket
 import threading
 import time
 import uuid
+from pathlib import Path
 
+from gateway.jobs import folders
 from gateway.jobs.queue import Claim, JobQueue
 from gateway.storage.database import Database
 from schemas.config import Config
 from schemas.errors import StorageError
-from schemas.jobs import JobState
+from schemas.jobs import AttemptOutcome, JobState
 
 log = logging.getLogger("burnedge.worker")
 
 
-def describe_exit(code: int | None) -> str:
+def exit_name(code: int | None) -> str:
+    """'SIGSEGV', 'exit code 1', ... for a process's exit code."""
     if code is None:
-        return "the analysis process did not end"
+        return "still running"
     if code < 0:
         try:
-            return f"the analysis process was killed by {signal.Signals(-code).name}"
+            return signal.Signals(-code).name
         except ValueError:
-            return f"the analysis process was killed by signal {-code}"
-    return f"the analysis process ended with exit code {code}"
+            return f"signal {-code}"
+    return f"exit code {code}"
+
+
+def describe_exit(code: int | None) -> str:
+    """Completes 'try 1 ...': 'ended by SIGSEGV', 'ended with exit code 1'."""
+    name = exit_name(code)
+    return f"ended by {name}" if code is not None and code < 0 else f"ended with {name}"
 
 
 class Worker:
@@ -73,22 +83,30 @@ class Worker:
 
     def run(self, claim: Claim) -> JobState:
         log.info("worker %s: analysis %s, try %d", self.owner, claim.job_id, claim.attempt)
-        child = self.context.Process(target=_run_child, args=(self.config, claim),
+        output = TryLog(folders.job_dir(self.config, claim.job_id) / "logs" / f"try-{claim.attempt}.log")
+        child = self.context.Process(target=_run_child, args=(self.config, claim, str(output.path)),
                                      name=f"analysis-{claim.job_id}")  # fmt: skip
         child.start()
+        try:
+            return self._watch(claim, child, output)
+        finally:
+            output.forward()
+
+    def _watch(self, claim: Claim, child, output: TryLog) -> JobState:
         conf = self.config.jobs
         started = next_beat = time.monotonic()
         finished = False
         while child.is_alive():
             child.join(timeout=min(0.5, conf.heartbeat_s))
+            output.forward()
             if self.stopping.is_set() or self.orphaned():
                 _kill(child)
                 return _quietly(lambda: self.queue.release(claim), JobState.queued)
             if time.monotonic() - started > conf.max_run_s and child.is_alive():
                 _kill(child)
                 log.error("analysis %s: still running after %.0f s, stopped as hung", claim.job_id, conf.max_run_s)
-                return _quietly(lambda: self.queue.retry_or_fail(claim, f"it was still running after {conf.max_run_s:.0f}"
-                                                                        " s and was stopped as hung"), JobState.running)  # fmt: skip
+                return self._ended(claim, f"was still running after {conf.max_run_s:.0f} s and was stopped as hung",
+                                   AttemptOutcome.hung, "SIGKILL", output)  # fmt: skip
             if time.monotonic() < next_beat or not child.is_alive() or finished:
                 continue
             try:
@@ -108,8 +126,21 @@ class Worker:
                 log.info("analysis %s cancelled", claim.job_id)
                 return JobState.cancelled
         if child.exitcode != 0:
-            return _quietly(lambda: self.queue.retry_or_fail(claim, describe_exit(child.exitcode)), JobState.running)
+            return self._ended(claim, describe_exit(child.exitcode), AttemptOutcome.crashed, exit_name(child.exitcode),
+                               output)  # fmt: skip
         return JobState.done
+
+    def _ended(self, claim: Claim, reason: str, outcome: AttemptOutcome, exit: str, output: TryLog) -> JobState:
+        """A try that did not finish: recorded with the end of its log, then retried or failed."""
+        output.forward()
+        tail = output.tail()
+        state = _quietly(lambda: self.queue.retry_or_fail(claim, reason, outcome=outcome, exit=exit, log_tail=tail),
+                         JobState.running)  # fmt: skip
+        said = _quietly(lambda: self.queue.get(claim.job_id), None)
+        lines = "\n    ".join(tail.strip().splitlines()[-12:])
+        log.error("analysis %s: %s (%s); its process last wrote:\n    %s", claim.job_id,
+                  said.error if said and said.error else f"try {claim.attempt} {reason}", state.value, lines)  # fmt: skip
+        return state
 
 
 def _quietly(action, fallback):
@@ -122,12 +153,48 @@ def _quietly(action, fallback):
         return fallback
 
 
-def _run_child(config: Config, claim: Claim) -> None:
+def _run_child(config: Config, claim: Claim, log_path: str) -> None:
+    _redirect_output(log_path)
     # Imported here, in the job's own process: the analysis libraries (pycolmap, Open3D, onnxruntime) are never
     # loaded into the gateway or the worker, which stay small and cannot be crashed by them.
     from gateway.jobs import runner
 
+    # After the imports: COLMAP's glog installs a crash handler of its own (the native stack); faulthandler prints
+    # the Python stack that led into the crash, then hands the signal on to it.
+    faulthandler.enable()
     runner.child_main(config, claim)
+
+
+class TryLog:
+    """One try's output file (the child's stdout and stderr), followed into the worker's own log as it grows."""
+
+    TAIL_BYTES = 16384
+
+    def __init__(self, path: Path):
+        self.path = path
+        path.parent.mkdir(parents=True, exist_ok=True)
+        self.offset = path.stat().st_size if path.exists() else 0
+        self.start = self.offset
+
+    def forward(self) -> None:
+        try:
+            with open(self.path, "rb") as handle:
+                handle.seek(self.offset)
+                chunk = handle.read()
+        except FileNotFoundError:
+            return
+        if chunk:
+            self.offset += len(chunk)
+            os.write(2, chunk)
+
+    def tail(self) -> str:
+        """The end of what this try wrote (a try repeated after a hand-back appends to the same file)."""
+        try:
+            with open(self.path, "rb") as handle:
+                handle.seek(max(self.start, self.offset - self.TAIL_BYTES))
+                return handle.read(self.TAIL_BYTES).decode("utf-8", "replace")
+        except FileNotFoundError:
+            return ""
 
 
 def _redirect_output(path: str) -> None:

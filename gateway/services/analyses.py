@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import base64
 import binascii
+import datetime as dt
 import hashlib
 import json
 from pathlib import Path
@@ -13,6 +14,7 @@ import msgspec
 import numpy as np
 
 from gateway.jobs import folders, timeline
+from gateway.jobs.capture_time import capture_time
 from gateway.jobs.queue import JobQueue
 from gateway.services.assets import AssetService
 from gateway.services.permissions import Principal, require_capture, require_read
@@ -27,7 +29,7 @@ from schemas.capture import Asset, AssetKind, MediaType
 from schemas.config import Config
 from schemas.errors import Conflict, InvalidInput
 from schemas.ids import uuid7
-from schemas.jobs import AnalysisJob, AnalysisRequest, BurnAnalysis, JobInputs, JobState, PictureRef
+from schemas.jobs import AnalysisJob, AnalysisRequest, BurnAnalysis, JobAttempt, JobInputs, JobState, PictureRef
 from schemas.longitudinal import TrackResult
 from schemas.patient import EncounterMode
 from schemas.records import RecordKind
@@ -56,7 +58,10 @@ class AnalysisService:
             for mark in body.ruler.marks:
                 if mark.asset_id not in by_id:
                     raise InvalidInput(f"ruler mark on {mark.asset_id}, which is not one of the analysed pictures")
-        refs = [PictureRef(asset_id=p.id, sha256=p.sha256, suffix=SUFFIX[p.media_type]) for p in pictures]
+        refs = [
+            PictureRef(asset_id=p.id, sha256=p.sha256, suffix=SUFFIX[p.media_type], filename=p.filename)
+            for p in pictures
+        ]
         with self.db.read() as conn:
             patient = store.get_head(conn, RecordKind.patient, encounter.data["patient_id"]).data
         # What the analysis reads from the record (%TBSA, provisional): a correction makes a new analysis.
@@ -65,8 +70,10 @@ class AnalysisService:
         digest = _digest(self.config, refs, body, record)
         mode = EncounterMode(encounter.data["mode"])
         now = iso(utcnow())
+        injury = encounter.data.get("time_of_injury")
+        captured = capture_time(pictures, dt.datetime.fromisoformat(injury) if injury else None, self.config.analysis)
         inputs = JobInputs(pictures=refs, masks=body.masks, ruler=body.ruler, marker_side_mm=body.marker_side_mm,
-                           requested_at=now)  # fmt: skip
+                           requested_at=now, captured=captured)  # fmt: skip
         with self.db.write() as conn:
             require_live_encounter(conn, encounter_id)
             existing = conn.execute(
@@ -80,11 +87,12 @@ class AnalysisService:
                 job_id, created = uuid7(), True
                 conn.execute(
                     "INSERT INTO analysis_jobs (id, encounter_id, patient_id, input_digest, request, state, priority,"
-                    " max_attempts, next_attempt_at, pictures, created_at, created_by, user_id, message)"
-                    " VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?)",
+                    " max_attempts, next_attempt_at, pictures, created_at, created_by, user_id, message, captured)"
+                    " VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?,?)",
                     (job_id, encounter_id, encounter.data["patient_id"], digest, msgspec.json.encode(inputs).decode(),
                      JobState.queued.value, 0 if mode is EncounterMode.emergency else 1, self.config.jobs.max_attempts,
-                     now, len(refs), now, principal.username, principal.user_id, "waiting for a worker"),
+                     now, len(refs), now, principal.username, principal.user_id, "waiting for a worker",
+                     msgspec.json.encode(captured).decode()),
                 )  # fmt: skip
                 audit.append(conn, action="analysis.request", user_id=principal.user_id, device_id=principal.device_id,
                              kind="analysis_job", record_id=job_id,
@@ -116,6 +124,12 @@ class AnalysisService:
     def get(self, principal: Principal, job_id: str) -> AnalysisJob:
         require_read(principal, RecordKind.burn_analysis)
         return self.queue.get(job_id)
+
+    def attempts(self, principal: Principal, job_id: str) -> list[JobAttempt]:
+        """Every try of the job and how it ended; the logs' server paths are shortened."""
+        require_read(principal, RecordKind.burn_analysis)
+        return [msgspec.structs.replace(a, log_tail=folders.without_server_paths(self.config, a.log_tail))
+                for a in self.queue.attempt_history(job_id)]  # fmt: skip
 
     def for_encounter(self, principal: Principal, encounter_id: str) -> list[AnalysisJob]:
         require_read(principal, RecordKind.burn_analysis)

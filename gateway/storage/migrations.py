@@ -264,3 +264,26 @@ def m008_must_change_password(db: Database) -> None:
     consultants' accounts get it too: sync/central/migrations.py)."""
     db.execute("ALTER TABLE users ADD COLUMN must_change_password INTEGER NOT NULL DEFAULT 0")
 
+
+@migrations()
+def m009_capture_time_and_attempts(db: Database) -> None:
+    """When each job's pictures were taken (JSON of schemas.jobs.CaptureTime; NULL for older jobs), and every
+    try of a job with how it ended (gateway/jobs/attempts.py)."""
+    db.execute("ALTER TABLE analysis_jobs ADD COLUMN captured TEXT")
+    db.execute(
+        """
+        CREATE TABLE analysis_attempts (
+            job_id TEXT NOT NULL REFERENCES analysis_jobs (id),
+            seq INTEGER NOT NULL,
+            attempt INTEGER NOT NULL,
+            started_at TEXT NOT NULL,
+            resumed_from TEXT NOT NULL DEFAULT '',
+            outcome TEXT NOT NULL,
+            ended_at TEXT,
+            stage TEXT NOT NULL DEFAULT '',
+            exit TEXT NOT NULL DEFAULT '',
+            reason TEXT NOT NULL DEFAULT '',
+            log_tail TEXT NOT NULL DEFAULT '',
+            PRIMARY KEY (job_id, seq)
+        )"""
+    )

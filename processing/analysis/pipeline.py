@@ -100,11 +100,12 @@ def run(config: Config, source: Path, out: Path, *, masks: Path | None = None, r
     (out / RESULT).unlink(missing_ok=True)
     report = reconstruction.run(config, source, out, ruler, gate=gate, progress=progress)
     timings = {t.stage: t.seconds for t in report.timings}
+    reused = [t.stage for t in report.timings if t.resumed]
 
     def failed(reason: str, code: FailureCode) -> AnalysisResult:
         return _write(out, AnalysisResult(status=AnalysisStatus.failed, reason=reason, failure=code,
-                                          timings_s=timings, hours_since_injury=patient.hours_since_injury,
-                                          software=report.software))  # fmt: skip
+                                          timings_s=timings, reused_stages=reused,
+                                          hours_since_injury=patient.hours_since_injury, software=report.software))  # fmt: skip
 
     if report.outcome is Outcome.failed:
         return failed(report.reason, report.failure)
@@ -115,6 +116,8 @@ def run(config: Config, source: Path, out: Path, *, masks: Path | None = None, r
     def stage(name: str, work: Callable[[], object]) -> None:
         stages.run(name, work)
         timings[name] = stages.timings[-1].seconds
+        if stages.timings[-1].resumed:
+            reused.append(name)
 
     paths = reconstruction.paths(out)
     mm_per_unit = report.scale.mm_per_unit if report.scale else None
@@ -137,7 +140,7 @@ def run(config: Config, source: Path, out: Path, *, masks: Path | None = None, r
         failed(f"the analysis stopped on an unexpected error ({exc}); the pictures and the reconstruction are kept, "
                "please report this to your IT contact", FailureCode.internal_error)  # fmt: skip
         raise
-    return _write(out, _result(config, report, patient, timings, p))
+    return _write(out, msgspec.structs.replace(_result(config, report, patient, timings, p), reused_stages=reused))
 
 
 def _result(config: Config, report: ReconstructionReport, patient: Patient, timings: dict[str, float],

@@ -78,6 +78,9 @@ def _exif_metadata(exif, width: int, height: int, orientation: int) -> CaptureMe
 
     return CaptureMetadata(
         captured_at=text(sub.get(ExifTags.Base.DateTimeOriginal) or base.get(ExifTags.Base.DateTime)),
+        captured_offset=text(sub.get(ExifTags.Base.OffsetTimeOriginal))
+        if sub.get(ExifTags.Base.DateTimeOriginal)
+        else None,
         camera_make=text(base.get(ExifTags.Base.Make)),
         camera_model=text(base.get(ExifTags.Base.Model)),
         focal_length_mm=num(sub.get(ExifTags.Base.FocalLength)),

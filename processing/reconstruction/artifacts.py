@@ -71,6 +71,10 @@ def publish_dir(tmp: Path, final: Path) -> Path:
     return final
 
 
+SECONDS = "_seconds"
+"""The fingerprints file's entry for the stages' durations (no stage has this name)."""
+
+
 class Stages:
     """Resumable stages in one analysis folder.
 
@@ -85,22 +89,29 @@ class Stages:
         self.file, self.done, self.wanted, self.on_start = fingerprints_file, done, wanted, on_start
         self.order = list(done)
         self.stored = json.loads(fingerprints_file.read_text()) if fingerprints_file.exists() else {}
+        self.seconds: dict[str, float] = self.stored.pop(SECONDS, {})
+        """How long each finished stage took when it was made (kept with the fingerprints)."""
         self.timings: list[StageTiming] = []
 
     def run(self, name: str, work: Callable[[], object]) -> None:
         if self.on_start is not None:
             self.on_start(name)
         if self.done[name].exists() and self.stored.get(name) == self.wanted[name]:
-            self.timings.append(StageTiming(stage=name, seconds=0.0, resumed=True))
+            self.timings.append(StageTiming(stage=name, seconds=self.seconds.get(name, 0.0), resumed=True))
             return
         for later in self.order[self.order.index(name) :]:
             self.done[later].unlink(missing_ok=True)
             self.stored.pop(later, None)
-        write_json(self.file, self.stored)
+            self.seconds.pop(later, None)
+        self._save()
         self.done[name].parent.mkdir(parents=True, exist_ok=True)
         start = time.perf_counter()
         work()
         self.stored[name] = self.wanted[name]
-        write_json(self.file, self.stored)
-        self.timings.append(StageTiming(stage=name, seconds=round(time.perf_counter() - start, 2)))
+        self.seconds[name] = round(time.perf_counter() - start, 2)
+        self._save()
+        self.timings.append(StageTiming(stage=name, seconds=self.seconds[name]))
         log.info("stage %s done in %.1f s", name, self.timings[-1].seconds)
+
+    def _save(self) -> None:
+        write_json(self.file, {**self.stored, SECONDS: self.seconds})

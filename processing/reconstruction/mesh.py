@@ -37,7 +37,7 @@ def run(conf: ReconstructionConfig, dense_dir: Path, out_dir: Path) -> Path:
     extent = float(np.max(cloud.get_max_bound() - cloud.get_min_bound()))
     depth = int(math.ceil(math.log2(max(extent, 1e-9) / cell)))
     mesh, densities = o3d.geometry.TriangleMesh.create_from_point_cloud_poisson(
-        cloud, depth=min(max(depth, 6), 11), scale=1.1, linear_fit=False
+        cloud, depth=min(max(depth, 6), 11), scale=1.1, linear_fit=False, n_threads=conf.mesh_threads
     )
     densities = np.asarray(densities)
     vertices = np.asarray(mesh.vertices)
