@@ -28,8 +28,6 @@ from gateway.server import SHUTDOWN_GRACE_S
 from processing.capture.stamp import with_capture_time
 from schemas.config import Config
 
-SERIES_PATIENT_ID, VISIT_IDS = DEMO_PATIENT_ID, DEMO_VISIT_IDS
-
 
 @dataclass(frozen=True)
 class SeriesOptions:
@@ -99,7 +97,7 @@ def visit_arrivals(client: GatewayClient) -> list[tuple[str, dt.datetime]]:
     """The demo patient's four visits (recorded by the demo's seeding) and when each began, read as the phone
     reads them."""
     visits = []
-    for visit_id in VISIT_IDS:
+    for visit_id in DEMO_VISIT_IDS:
         encounter = client.get(f"/api/v1/encounters/{visit_id}", "read the visit")
         visits.append((visit_id, dt.datetime.fromisoformat(encounter["data"]["time_of_arrival"])))
     return visits
@@ -138,7 +136,7 @@ def healing_track(client: GatewayClient, visits: int, timeout_s: float = 300.0) 
     track: dict = {}
     while time.monotonic() < deadline:
         try:
-            track = client.get(f"/api/v1/patients/{SERIES_PATIENT_ID}/healing", "read the healing track")
+            track = client.get(f"/api/v1/patients/{DEMO_PATIENT_ID}/healing", "read the healing track")
             if len(track.get("sessions", [])) >= visits:
                 return track
         except GatewayError as exc:
@@ -184,8 +182,8 @@ def run_demo(config: Config, options: SeriesOptions, password: str, *, keep_serv
             + ("the phantom's exact masks sent as a clinician's" if options.clinician_masks else "burnedge's U-Net")
             + ")", "", summary_table(track, jobs, results), "",
             "Painted burn meshes (GLB; open in any glTF viewer) and every file of each analysis:", *files,
-            f"Healing track: {patient_dir(config, SERIES_PATIENT_ID) / 'track.json'}"
-            f"  ({gateway.url}/api/v1/patients/{SERIES_PATIENT_ID}/healing)",
+            f"Healing track: {patient_dir(config, DEMO_PATIENT_ID) / 'track.json'}"
+            f"  ({gateway.url}/api/v1/patients/{DEMO_PATIENT_ID}/healing)",
             f"The analyses' log (COLMAP and the workers): {config.jobs.log_file or 'the output above'}",
             "Decision support only: a clinician confirms every figure. Surface relief is geometry, not burn depth.",
         ])  # fmt: skip

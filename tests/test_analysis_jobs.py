@@ -169,13 +169,19 @@ def test_the_healing_track_links_the_analysis_and_shows_no_server_paths(uninterr
     assert str(gateway.db.parent) not in response.text and '"/tmp' not in response.text
 
 
-def test_a_worker_killed_mid_reconstruction_resumes_and_gives_the_same_metrics(uninterrupted, gateway, phone, phantom):
-    _, _, reference = uninterrupted
+def analysis_at_dense(gateway: GatewayProcess, phone: GatewayClient, phantom: Path) -> tuple[dict, int, int]:
+    """A new visit's analysis (true masks) once it reaches the dense stage: (job, worker pid, analysis pid)."""
     enc, assets = new_visit(phone, phantom)
     requested = phone.post(f"/api/v1/encounters/{enc}/analyses", true_masks(phantom, assets), "request")
     at_stage(phone, requested["id"], "dense")
     [worker] = children(gateway.proc.pid)
     [analysis] = children(worker)
+    return requested, worker, analysis
+
+
+def test_a_worker_killed_mid_reconstruction_resumes_and_gives_the_same_metrics(uninterrupted, gateway, phone, phantom):
+    _, _, reference = uninterrupted
+    requested, worker, analysis = analysis_at_dense(gateway, phone, phantom)
     os.kill(worker, signal.SIGKILL)
     wait_for(lambda: not alive(analysis), 10, "the analysis process to die with its worker")
     last = GatewayClient.follow(phone, requested["id"], lambda e: None)
@@ -200,11 +206,7 @@ def test_a_worker_killed_mid_reconstruction_resumes_and_gives_the_same_metrics(u
 def test_a_native_crash_of_the_analysis_is_retried_and_said(gateway, phone, phantom):
     """SIGSEGV in the analysis process (as Open3D once did in meshing): the queue retries from that stage, and the
     job, its attempts and the worker's log say what happened, with the Python stack that led into it."""
-    enc, assets = new_visit(phone, phantom)
-    requested = phone.post(f"/api/v1/encounters/{enc}/analyses", true_masks(phantom, assets), "request")
-    at_stage(phone, requested["id"], "dense")
-    [worker] = children(gateway.proc.pid)
-    [analysis] = children(worker)
+    requested, worker, analysis = analysis_at_dense(gateway, phone, phantom)
     os.kill(analysis, signal.SIGSEGV)
     last = GatewayClient.follow(phone, requested["id"], lambda e: None)
     assert last["state"] == "done", last
@@ -213,15 +215,13 @@ def test_a_native_crash_of_the_analysis_is_retried_and_said(gateway, phone, phan
     assert finished["history"] == [f"{said}; retried from dense"] and finished["error"] is None
     crashed, done = phone.get(f"/api/v1/analyses/{requested['id']}/attempts", "attempts")
     assert (crashed["outcome"], crashed["exit"], crashed["stage"]) == ("crashed", "SIGSEGV", "dense")
-    assert (
-        "Segmentation fault" in crashed["log_tail"] and "File " in crashed["log_tail"]
-    )  # faulthandler: the Python stack
-    assert "SIGSEGV" in crashed["log_tail"]  # COLMAP glog: the native one
-    assert "/site-packages/" not in crashed["log_tail"] and str(gateway.db.parent) not in crashed["log_tail"]
+    tail = crashed["log_tail"]
+    assert "Segmentation fault" in tail and "File " in tail  # faulthandler: the Python stack
+    assert "SIGSEGV" in tail  # COLMAP glog: the native one
+    assert "/site-packages/" not in tail and str(gateway.db.parent) not in tail
     assert done["outcome"] == "done" and done["resumed_from"] == "dense"
-    assert said in gateway.log.read_text(errors="replace") and "Segmentation fault" in gateway.log.read_text(
-        errors="replace"
-    )
+    worker_log = gateway.log.read_text(errors="replace")
+    assert said in worker_log and "Segmentation fault" in worker_log
 
 
 def test_cancelling_a_running_analysis_stops_its_process(gateway, phone, phantom):

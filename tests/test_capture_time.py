@@ -54,8 +54,8 @@ def test_a_day_0_visit_analysed_20_days_later_counts_to_the_camera_clock():
     local = taken.astimezone(dt.timezone(dt.timedelta(hours=3))).strftime("%Y:%m:%d %H:%M:%S")
     captured = capture_time([picture(local), picture(local)], INJURY, NAIROBI)
     assert captured.source is CaptureTimeSource.camera and captured.detail == "camera clock of 2 of 2 pictures"
-    assert hours_since_injury(captured, INJURY) == pytest.approx(3.0)
-    assert hours_since_injury(captured, INJURY) < NAIROBI.provisional_hours  # still provisional
+    assert hours_since_injury(captured.at, INJURY) == pytest.approx(3.0)
+    assert hours_since_injury(captured.at, INJURY) < NAIROBI.provisional_hours  # still provisional
 
 
 def test_the_earliest_picture_counts_and_an_offset_beats_the_configured_zone():
@@ -81,7 +81,9 @@ def test_an_implausible_or_missing_camera_time_falls_back_to_the_upload(taken, w
 def test_a_video_frame_uses_the_containers_creation_time():
     frame = picture("2026-11-10T09:15:00.000000Z")
     captured = capture_time([frame], INJURY, NAIROBI)
-    assert captured.source is CaptureTimeSource.camera and hours_since_injury(captured, INJURY) == pytest.approx(3.25)
+    assert captured.source is CaptureTimeSource.camera and hours_since_injury(captured.at, INJURY) == pytest.approx(
+        3.25
+    )
 
 
 def test_mixed_pictures_say_which_had_a_camera_time():

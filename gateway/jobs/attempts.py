@@ -52,21 +52,24 @@ def history(conn: sqlite3.Connection, job_id: str) -> list[JobAttempt]:
     ]
 
 
-def summary(attempt: JobAttempt) -> str:
-    """'try 1 ended by SIGSEGV in the mesh stage; retried from mesh' (the retry part added by the caller)."""
-    where = f" in the {attempt.stage} stage" if attempt.stage else ""
-    return f"try {attempt.attempt} {attempt.reason}{where}"
+def ended(attempt: int, reason: str, stage: str) -> str:
+    """'try 1 ended by SIGSEGV in the mesh stage'."""
+    return f"try {attempt} {reason}" + (f" in the {stage} stage" if stage else "")
 
 
 def summaries(conn: sqlite3.Connection, job_id: str) -> list[str]:
-    """One line per try that crashed, hung or lost its worker, for the job's `history`."""
-    tries = history(conn, job_id)
+    """One line per try that crashed, hung or lost its worker, for the job's `history` (read on every poll of the
+    job: the logs are left out)."""
+    tries = conn.execute(
+        "SELECT attempt, outcome, stage, reason, resumed_from FROM analysis_attempts WHERE job_id = ? ORDER BY seq",
+        (job_id,),
+    ).fetchall()
     lines = []
     for k, a in enumerate(tries):
-        if a.outcome not in (AttemptOutcome.crashed, AttemptOutcome.hung, AttemptOutcome.lost):
+        if a["outcome"] not in (AttemptOutcome.crashed, AttemptOutcome.hung, AttemptOutcome.lost):
             continue
-        line = summary(a)
+        line = ended(a["attempt"], a["reason"], a["stage"])
         if k + 1 < len(tries):
-            line += f"; retried from {tries[k + 1].resumed_from or 'the start'}"
+            line += f"; retried from {tries[k + 1]['resumed_from'] or 'the start'}"
         lines.append(line)
     return lines

@@ -82,5 +82,6 @@ def capture_time(pictures: list[Asset], injury: dt.datetime | None, conf: Analys
     return CaptureTime(at=iso(earliest.astimezone(dt.UTC)), source=CaptureTimeSource.upload, detail=detail)
 
 
-def hours_since_injury(captured: CaptureTime, injury: dt.datetime) -> float:
-    return max(0.0, (dt.datetime.fromisoformat(captured.at) - injury).total_seconds() / 3600)
+def hours_since_injury(taken: str, injury: dt.datetime) -> float:
+    """From the injury to `taken` (ISO 8601, e.g. CaptureTime.at), never negative."""
+    return max(0.0, (dt.datetime.fromisoformat(taken) - injury).total_seconds() / 3600)

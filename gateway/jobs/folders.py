@@ -1,7 +1,7 @@
 """Where each analysis job keeps its files, which of them a user may download, and the retention clean-up.
 
-WORK/<job id>/source/<asset id>.<ext>     the pictures, linked from the media store
-WORK/<job id>/masks/<asset id>.png|.json  a clinician's masks or outlines
+WORK/<job id>/source/<stem>.<ext>         the pictures, linked from the media store (stem: PictureRef.stem)
+WORK/<job id>/masks/<stem>.png|.json      a clinician's masks or outlines
 WORK/<job id>/ruler.json                  ruler points, when given
 WORK/<job id>/analysis/                   the analysis folder (processing/analysis/pipeline.py)
 WORK/<job id>/logs/try-<n>.log            what each try's process wrote (native crashes print only there)

@@ -113,13 +113,13 @@ class JobQueue:
         cur = conn.execute(
             "UPDATE analysis_jobs SET state = ?, result_status = ?, error = ?, message = ?, finished_at = ?,"
             " fraction = CASE WHEN ? = 'done' THEN 1.0 ELSE fraction END, lease_owner = NULL, lease_expires_at = NULL"
-            " WHERE id = ? AND state = 'running' AND lease_owner = ?",
+            " WHERE id = ? AND state = 'running' AND lease_owner = ? RETURNING stage",
             (state.value, result_status, error, message, _at(_now()), state.value, claim.job_id, claim.owner),
         )
-        if cur.rowcount != 1:
+        closed = cur.fetchone()
+        if closed is None:
             return False
-        stage = conn.execute("SELECT stage FROM analysis_jobs WHERE id = ?", (claim.job_id,)).fetchone()[0]
-        attempts.end(conn, claim.job_id, _ENDED[state], _at(_now()), stage=stage, reason=error or message)
+        attempts.end(conn, claim.job_id, _ENDED[state], _at(_now()), stage=closed["stage"], reason=error or message)
         return True
 
     def finish(self, claim: Claim, state: JobState, *, error: str | None, message: str) -> bool:
@@ -143,7 +143,7 @@ class JobQueue:
     def _after_try(self, conn, job_id: str, row, reason: str, now: dt.datetime,
                    outcome: AttemptOutcome = AttemptOutcome.lost, exit: str = "", log_tail: str = "") -> JobState:  # fmt: skip
         stage = row["stage"]
-        ended = f"try {row['attempts']} {reason}" + (f" in the {stage} stage" if stage else "")
+        ended = attempts.ended(row["attempts"], reason, stage)
         attempts.end(conn, job_id, outcome, _at(now), stage=stage, reason=reason, exit=exit, log_tail=log_tail)
         if row["cancel_requested"]:
             state, error, when, message = JobState.cancelled, None, now, "cancelled"
@@ -167,17 +167,17 @@ class JobQueue:
     def release(self, claim: Claim) -> None:
         """Hand a job back unfinished because its worker is stopping: queued at once, the try not counted."""
         with self.db.write() as conn:
-            conn.execute(
+            row = conn.execute(
                 "UPDATE analysis_jobs SET state = CASE WHEN cancel_requested THEN 'cancelled' ELSE 'queued' END,"
                 " attempts = max(attempts - 1, 0), next_attempt_at = ?, lease_owner = NULL, lease_expires_at = NULL,"
                 " message = CASE WHEN cancel_requested THEN 'cancelled' ELSE 'waiting: the worker was stopped' END,"
                 " finished_at = CASE WHEN cancel_requested THEN ? END WHERE id = ? AND state = 'running'"
-                " AND lease_owner = ?",
+                " AND lease_owner = ? RETURNING stage",
                 (_at(_now()), _at(_now()), claim.job_id, claim.owner),
-            )
-            row = conn.execute("SELECT stage FROM analysis_jobs WHERE id = ?", (claim.job_id,)).fetchone()
-            attempts.end(conn, claim.job_id, AttemptOutcome.handed_back, _at(_now()), stage=row["stage"] if row else "",
-                         reason="was handed back: its worker was stopping")  # fmt: skip
+            ).fetchone()
+            if row is not None:  # still this worker's try (a lost lease's try is closed by whoever took it over)
+                attempts.end(conn, claim.job_id, AttemptOutcome.handed_back, _at(_now()), stage=row["stage"],
+                             reason="was handed back: its worker was stopping")  # fmt: skip
 
     # the gateway ---------------------------------------------------------------------------------------------
     def reap(self) -> int:

@@ -35,7 +35,7 @@ from schemas.analysis import AnalysisResult, AnalysisStatus
 from schemas.base import iso, utcnow
 from schemas.config import Config
 from schemas.errors import BurnedgeError, StorageError
-from schemas.jobs import BurnAnalysis, CaptureTime, CaptureTimeSource, JobInputs, JobState
+from schemas.jobs import BurnAnalysis, JobInputs, JobState
 from schemas.reconstruction import RulerMark, RulerPoints
 from schemas.records import RecordKind
 
@@ -101,21 +101,21 @@ def _lay_out(config: Config, folder: Path, inputs: JobInputs) -> tuple[Path, Pat
             except OSError:  # work_dir on another file system
                 shutil.copyfile(store.blob(picture.sha256), tmp)
             os.replace(tmp, target)
-    stems = {p.asset_id: p.stem for p in inputs.pictures}
+    pictures = {p.asset_id: p for p in inputs.pictures}
     masks = None
     if inputs.masks:
         masks = folder / "masks"
         masks.mkdir(exist_ok=True)
         for mask in inputs.masks:
             if mask.png_base64:
-                (masks / f"{stems[mask.asset_id]}.png").write_bytes(base64.b64decode(mask.png_base64))
+                (masks / f"{pictures[mask.asset_id].stem}.png").write_bytes(base64.b64decode(mask.png_base64))
             else:
-                write_json(masks / f"{stems[mask.asset_id]}.json", {"polygons": mask.polygons})
+                write_json(masks / f"{pictures[mask.asset_id].stem}.json", {"polygons": mask.polygons})
     ruler = None
     if inputs.ruler is not None:
-        names = {p.asset_id: f"{p.stem}{p.suffix}" for p in inputs.pictures}
         ruler = RulerPoints(distance_mm=inputs.ruler.distance_mm,
-                            marks=[RulerMark(image=names[m.asset_id], a=m.a, b=m.b) for m in inputs.ruler.marks])  # fmt: skip
+                            marks=[RulerMark(image=f"{pictures[m.asset_id].stem}{pictures[m.asset_id].suffix}", a=m.a,
+                                             b=m.b) for m in inputs.ruler.marks])  # fmt: skip
     return source, masks, ruler
 
 
@@ -126,10 +126,10 @@ def _patient(db: Database, encounter_id: str, inputs: JobInputs) -> Patient:
     encounter = store.get_head(conn, RecordKind.encounter, encounter_id).data
     patient = store.get_head(conn, RecordKind.patient, encounter["patient_id"]).data
     hours = None
-    captured = inputs.captured or (CaptureTime(at=inputs.requested_at, source=CaptureTimeSource.upload, detail="")
-                                   if inputs.requested_at else None)  # fmt: skip
-    if encounter.get("time_of_injury") and captured is not None:
-        hours = hours_since_injury(captured, dt.datetime.fromisoformat(encounter["time_of_injury"]))
+    # Jobs an older gateway queued carry no capture time: their request's time stands in.
+    taken = inputs.captured.at if inputs.captured else inputs.requested_at
+    if encounter.get("time_of_injury") and taken:
+        hours = hours_since_injury(taken, dt.datetime.fromisoformat(encounter["time_of_injury"]))
     weight = encounter.get("weight_kg") or patient.get("weight_kg")
     height = patient.get("height_cm")
     if weight is None or height is None:
