@@ -20,6 +20,10 @@ def test_the_demo_uploads_analyses_and_aligns_four_visits_then_exits(tmp_path):
     assert run.returncode == 0, run.stderr[-4000:]
     out = run.stdout
     assert "%TBSA" in out and "Healing trend:" in out and "Decision support only" in out
+    # One story: the charted burn is the rendered forearm burn (about 18 cm2 of 1.85 m2), photographed 3 h after the
+    # injury (provisional) though analysed three weeks later.
+    assert "(Lund-Browder, superficial excluded): 0.1 %" in out and "formal resuscitation not indicated" in out
+    assert next(line for line in out.splitlines() if line.startswith("day 0 ")).count("yes (3 h)") == 1
     for day in (0, 7, 14, 21):
         assert f"day {day}" in out
         assert f"day {day:>2} [" in run.stderr  # a progress bar per visit
