@@ -46,8 +46,12 @@ OURS = {
     "ours_patch_I": PhantomSpec(shape=PhantomShape.patch, seed=35, tone=SkinTone.I, area_cm2=30.0, depth_mm=4.0),
     "ours_foot_III": PhantomSpec(shape=PhantomShape.foot, seed=36, tone=SkinTone.III, area_cm2=12.0, depth_mm=1.0),
 }
-SHARED_SCENES = {"p1_forearm": "p1_forearm", "p2_foot": "p2_foot", "p3_thigh": "p3_thigh",
-                 "p4_day00": "p4_series_foot/session_day00"}  # fmt: skip
+SHARED_SCENES = {
+    "p1_forearm": "p1_forearm",
+    "p2_foot": "p2_foot",
+    "p3_thigh": "p3_thigh",
+    "p4_day00": "p4_series_foot/session_day00",
+}
 
 
 def scenes(work: Path, only: set[str]) -> dict[str, Path]:
@@ -72,8 +76,10 @@ def whole_face_area_mm2(vertices, faces, q) -> float:
 
 def rule_areas(data: np.lib.npyio.NpzFile) -> dict[str, float]:
     v, f = data["vertices"], data["faces"]
-    areas = {rule: burn_region.burn_area_mm2(v, f, data[f"q_{rule}"]) / 100
-             for rule in ("log_odds", "weighted_mean", "noisy_or")}  # fmt: skip
+    areas = {
+        rule: burn_region.burn_area_mm2(v, f, data[f"q_{rule}"]) / 100
+        for rule in ("log_odds", "weighted_mean", "noisy_or")
+    }
     areas["seed_noisy_or_whole_faces"] = whole_face_area_mm2(v, f, data["q_noisy_or"]) / 100
     return areas
 
@@ -106,24 +112,31 @@ def row(name: str, scene: Path, work: Path, model: bool) -> dict:
         return round(100 * (value - true) / true, 2)
 
     return {
-        "scene": name, "true_area_cm2": round(truth["burn_area_cm2"], 3), "area_cm2": m.area_cm2,
+        "scene": name,
+        "true_area_cm2": round(truth["burn_area_cm2"], 3),
+        "area_cm2": m.area_cm2,
         "area_err_pct": err(m.area_cm2, truth["burn_area_cm2"]),
         "perimeter_err_pct": err(m.perimeter_cm, truth["burn_perimeter_cm"]),
-        "true_depth_mm": round(truth["max_depth_mm"], 2), "relief_max_mm": m.relief_max_mm,
+        "true_depth_mm": round(truth["max_depth_mm"], 2),
+        "relief_max_mm": m.relief_max_mm,
         "relief_err_mm": round(m.relief_max_mm - truth["max_depth_mm"], 2) if m.relief_max_mm is not None else None,
         "volume_err_pct": err(m.volume_cm3, truth["volume_cm3"]) if truth["volume_cm3"] > 0.05 else None,
-        "volume_cm3": m.volume_cm3, "true_volume_cm3": round(truth["volume_cm3"], 3),
+        "volume_cm3": m.volume_cm3,
+        "true_volume_cm3": round(truth["volume_cm3"], 3),
         "confidence": result.confidence.score,
-        "relief_err_mm_quartic": round(quartic_relief - truth["max_depth_mm"], 2) if quartic_relief is not None
+        "relief_err_mm_quartic": round(quartic_relief - truth["max_depth_mm"], 2)
+        if quartic_relief is not None
         else None,
         "volume_err_pct_quartic": err(quartic_volume, truth["volume_cm3"])
-        if truth["volume_cm3"] > 0.05 and quartic_volume is not None else None,
+        if truth["volume_cm3"] > 0.05 and quartic_volume is not None
+        else None,
         "reference": result.reference.kind if result.reference else None,
         "reference_holdout_mm": result.reference.holdout_mm if result.reference else None,
         **{f"area_err_pct_{rule}": err(a, truth["burn_area_cm2"]) for rule, a in areas.items()},
-        "seconds_segment_surface_metrics": round(sum(result.timings_s.get(s, 0) for s in
-                                                     ("segment", "surface", "metrics")), 1),
-    }  # fmt: skip
+        "seconds_segment_surface_metrics": round(
+            sum(result.timings_s.get(s, 0) for s in ("segment", "surface", "metrics")), 1
+        ),
+    }
 
 
 def summary(rows: list[dict]) -> dict:
@@ -133,11 +146,21 @@ def summary(rows: list[dict]) -> dict:
         values = [abs(r[key]) for r in ok if r.get(key) is not None]
         return (round(statistics.median(values), 2), round(max(values), 2)) if values else (None, None)
 
-    return {key: {"median_abs": med_abs(key)[0], "worst_abs": med_abs(key)[1]}
-            for key in ("area_err_pct", "perimeter_err_pct", "relief_err_mm", "volume_err_pct", "relief_err_mm_quartic",
-                        "volume_err_pct_quartic",
-                        "area_err_pct_log_odds", "area_err_pct_weighted_mean", "area_err_pct_noisy_or",
-                        "area_err_pct_seed_noisy_or_whole_faces")}  # fmt: skip
+    return {
+        key: {"median_abs": med_abs(key)[0], "worst_abs": med_abs(key)[1]}
+        for key in (
+            "area_err_pct",
+            "perimeter_err_pct",
+            "relief_err_mm",
+            "volume_err_pct",
+            "relief_err_mm_quartic",
+            "volume_err_pct_quartic",
+            "area_err_pct_log_odds",
+            "area_err_pct_weighted_mean",
+            "area_err_pct_noisy_or",
+            "area_err_pct_seed_noisy_or_whole_faces",
+        )
+    }
 
 
 def main() -> None:
@@ -152,9 +175,13 @@ def main() -> None:
     for name, scene in scenes(Path(args.work), only).items():
         rows.append(row(name, scene, work, args.model))
         print(json.dumps(rows[-1]), flush=True)
-    report = {"date": dt.date.today().isoformat(), "machine": f"{platform.processor() or platform.machine()}, "
-              f"{os.cpu_count()} cores", "masks": "model" if args.model else "true", "rows": rows,
-              "summary": summary(rows)}  # fmt: skip
+    report = {
+        "date": dt.date.today().isoformat(),
+        "machine": f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores",
+        "masks": "model" if args.model else "true",
+        "rows": rows,
+        "summary": summary(rows),
+    }
     print(json.dumps(report["summary"], indent=2))
     (Path(args.work) / f"analysis_accuracy_{report['masks']}.json").write_text(json.dumps(report, indent=2))
 

@@ -36,15 +36,24 @@ def photos(work: Path) -> Path:
     if (SHARED_SET / "images").is_dir():
         return SHARED_SET
     out = work / "phantom"
-    subprocess.run([sys.executable, "-m", "gateway.cli", "phantom", "--out", str(out), "--views", "12", "--seed", "21"],
-                   check=True, cwd=REPO, capture_output=True)  # fmt: skip
+    subprocess.run(
+        [sys.executable, "-m", "gateway.cli", "phantom", "--out", str(out), "--views", "12", "--seed", "21"],
+        check=True,
+        cwd=REPO,
+        capture_output=True,
+    )
     return out
 
 
 def direct(images: Path, out: Path) -> float:
     start = time.perf_counter()
-    subprocess.run([sys.executable, "-m", "gateway.cli", "analyze", str(images), "--out", str(out)], check=True,
-                   cwd=REPO, capture_output=True, env={**os.environ, **FAST_HASH_ENV})  # fmt: skip
+    subprocess.run(
+        [sys.executable, "-m", "gateway.cli", "analyze", str(images), "--out", str(out)],
+        check=True,
+        cwd=REPO,
+        capture_output=True,
+        env={**os.environ, **FAST_HASH_ENV},
+    )
     return time.perf_counter() - start
 
 
@@ -70,12 +79,14 @@ def main() -> None:
             phone.post("/api/v1/encounters", e, "encounter")
             for f in sorted((scene / "images").glob("*.jpg")):
                 phone.upload(f, e["id"])
-            read = request("GET", f"/api/v1/encounters/{e['id']}/record",
-                           {"Authorization": phone.http.headers["Authorization"]})  # fmt: skip
+            read = request(
+                "GET", f"/api/v1/encounters/{e['id']}/record", {"Authorization": phone.http.headers["Authorization"]}
+            )
 
             def load():
-                return run_load(gw.port, lambda i, s: read, connections=args.connections, seconds=args.seconds,
-                                warmup=1.0).row()  # fmt: skip
+                return run_load(
+                    gw.port, lambda i, s: read, connections=args.connections, seconds=args.seconds, warmup=1.0
+                ).row()
 
             idle = load()
             requested = time.perf_counter()
@@ -90,14 +101,19 @@ def main() -> None:
             phone.close()
             gw.stop()
     figures = {
-        "date": dt.date.today().isoformat(), "machine": f"{platform.machine()}, {os.cpu_count()} cores",
-        "scene": scene.name, "views": len(list((scene / "images").glob("*.jpg"))),
-        "api_idle": idle, "api_during_analysis": busy,
+        "date": dt.date.today().isoformat(),
+        "machine": f"{platform.machine()}, {os.cpu_count()} cores",
+        "scene": scene.name,
+        "views": len(list((scene / "images").glob("*.jpg"))),
+        "api_idle": idle,
+        "api_during_analysis": busy,
         "p99_ratio_during_vs_idle": round(busy["p99_ms"] / idle["p99_ms"], 2),
-        "end_to_end_s": round(queued_s, 1), "direct_analyze_s": round(baseline_s, 1),
-        "end_to_end_vs_direct": round(queued_s / baseline_s, 2), "job_state": last["state"],
+        "end_to_end_s": round(queued_s, 1),
+        "direct_analyze_s": round(baseline_s, 1),
+        "end_to_end_vs_direct": round(queued_s / baseline_s, 2),
+        "job_state": last["state"],
         "area_cm2": result["metrics"]["area_cm2"],
-    }  # fmt: skip
+    }
     print(f"{'':<28}{'requests/s':>12}{'p50 ms':>10}{'p99 ms':>10}")
     for name, row in (("API, no analysis (baseline)", idle), ("API, analysis running", busy)):
         print(f"{name:<28}{row['rps']:>12.1f}{row['p50_ms']:>10.2f}{row['p99_ms']:>10.2f}")

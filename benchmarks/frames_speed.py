@@ -54,8 +54,10 @@ def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=3)
     args = parser.parse_args(argv)
-    print(f"frame extraction, {dt.date.today()}, {platform.machine()}, {os.cpu_count()} cores, "
-          f"Python {platform.python_version()}, PyAV {av.__version__}; medians of {args.runs} runs")  # fmt: skip
+    print(
+        f"frame extraction, {dt.date.today()}, {platform.machine()}, {os.cpu_count()} cores, "
+        f"Python {platform.python_version()}, PyAV {av.__version__}; medians of {args.runs} runs"
+    )
     print(
         f"{'clip':<28}{'decoder s':>10}{'to-image s':>11}{'extract s':>10}{'x decoder':>10}{'x to-image':>11}  frames"
     )
@@ -72,9 +74,11 @@ def main(argv: list[str] | None = None) -> None:
             took = statistics.median(r.seconds for r in results)
             r = results[0]
             accepted = sum(f.verdict.accepted for f in r.frames)
-            print(f"{name:<28}{decoder:>10.3f}{to_image:>11.3f}{took:>10.3f}{took / decoder:>10.2f}{took / to_image:>11.2f}"
-                  f"  {len(r.frames)} kept ({accepted} accepted), {len(r.skipped_duplicates)} near-duplicates, "
-                  f"{r.decoded} decoded")  # fmt: skip
+            print(
+                f"{name:<28}{decoder:>10.3f}{to_image:>11.3f}{took:>10.3f}{took / decoder:>10.2f}{took / to_image:>11.2f}"
+                f"  {len(r.frames)} kept ({accepted} accepted), {len(r.skipped_duplicates)} near-duplicates, "
+                f"{r.decoded} decoded"
+            )
 
 
 if __name__ == "__main__":

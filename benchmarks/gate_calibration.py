@@ -49,8 +49,10 @@ def main(argv: list[str] | None = None) -> None:
             blurred = cv2.GaussianBlur(img, (0, 0), sigma) if sigma else img
             row.append(gate_bytes(_encode(blurred), config, name=path.name).figures.local_sharpness)
         print(f"{path.parent.parent.name[:6]}/{path.stem}  " + "  ".join(f"{v:6.0f}" for v in row))
-    print(f"\nexposure: mean intensity (limits {config.min_mean_intensity}-{config.max_mean_intensity}),"
-          f" bright fraction (limit {config.max_bright_fraction}) by linear gain")  # fmt: skip
+    print(
+        f"\nexposure: mean intensity (limits {config.min_mean_intensity}-{config.max_mean_intensity}),"
+        f" bright fraction (limit {config.max_bright_fraction}) by linear gain"
+    )
     print("gain   " + "  ".join(f"{g:>11}" for g in GAINS))
     for path in views:
         img = cv2.imread(str(path))

@@ -59,8 +59,15 @@ def _seed(port: int, connections: int) -> tuple[dict[str, str], list[str]]:
     ids = []
     for i in range(connections):
         pid = uuid7()
-        body = {"id": pid, "given_name": f"Bench{i}", "family_name": "Load", "date_of_birth": "1980-05-05",
-                "sex": "female", "weight_kg": 60.0, "height_cm": 160.0}  # fmt: skip
+        body = {
+            "id": pid,
+            "given_name": f"Bench{i}",
+            "family_name": "Load",
+            "date_of_birth": "1980-05-05",
+            "sex": "female",
+            "weight_kg": 60.0,
+            "height_cm": 160.0,
+        }
         assert httpx.post(base + "/api/v1/patients", json=body, headers=headers).status_code == 201
         ids.append(pid)
     return headers, ids
@@ -76,9 +83,17 @@ def _reads(headers: dict[str, str], ids: list[str]):
 def _writes(headers: dict[str, str], ids: list[str]):
     def make(i: int, state: dict) -> bytes:
         state["weight"] = 61.0 if state.get("weight") == 60.0 else 60.0
-        body = json.dumps({"id": ids[i], "given_name": f"Bench{i}", "family_name": "Load",
-                           "date_of_birth": "1980-05-05", "sex": "female", "weight_kg": state["weight"],
-                           "height_cm": 160.0}).encode()  # fmt: skip
+        body = json.dumps(
+            {
+                "id": ids[i],
+                "given_name": f"Bench{i}",
+                "family_name": "Load",
+                "date_of_birth": "1980-05-05",
+                "sex": "female",
+                "weight_kg": state["weight"],
+                "height_cm": 160.0,
+            }
+        ).encode()
         h = {**headers, "Content-Type": "application/json", "If-Match": f'"{state.get("version", 1)}"'}
         return request("PUT", f"/api/v1/patients/{ids[i]}", h, body)
 
@@ -99,9 +114,27 @@ def main(argv: list[str] | None = None) -> dict:
 
     with tempfile.TemporaryDirectory() as tmp:
         db = Path(tmp) / "bench.sqlite3"
-        subprocess.run([sys.executable, "-m", "gateway.cli", "--db", str(db), "users", "add", "--username", "bench",
-                        "--role", "clinician", "--password-stdin"], input=PASSWORD + "\n", text=True, check=True,
-                       cwd=REPO, capture_output=True)  # fmt: skip
+        subprocess.run(
+            [
+                sys.executable,
+                "-m",
+                "gateway.cli",
+                "--db",
+                str(db),
+                "users",
+                "add",
+                "--username",
+                "bench",
+                "--role",
+                "clinician",
+                "--password-stdin",
+            ],
+            input=PASSWORD + "\n",
+            text=True,
+            check=True,
+            cwd=REPO,
+            capture_output=True,
+        )
         gw_port, bare_port = _free_port(), _free_port()
         gateway = _start(["-m", "gateway.cli", "--db", str(db), "serve", "--port", str(gw_port)], gw_port)
         bare = _start(["-m", "benchmarks.bare_app", str(bare_port)], bare_port)
@@ -137,13 +170,17 @@ def main(argv: list[str] | None = None) -> dict:
 
 
 def _print(report: dict) -> None:
-    print(f"gateway load, {report['date']}, {report['machine']}, Python {report['python']}, "
-          f"{report['connections']} connections x {report['seconds']} s")  # fmt: skip
+    print(
+        f"gateway load, {report['date']}, {report['machine']}, Python {report['python']}, "
+        f"{report['connections']} connections x {report['seconds']} s"
+    )
     print(f"{'workload':<15}{'req/s':>10}{'p50 ms':>10}{'p99 ms':>10}{'errors':>8}")
     for name, row in report["results"].items():
         print(f"{name:<15}{row['rps']:>10.1f}{row['p50_ms']:>10.2f}{row['p99_ms']:>10.2f}{row['errors']:>8}")
-    print(f"read throughput / bare: {report['read_vs_bare']:.2f} (goal >= 0.50); "
-          f"write / bare: {report['write_vs_bare']:.2f}")  # fmt: skip
+    print(
+        f"read throughput / bare: {report['read_vs_bare']:.2f} (goal >= 0.50); "
+        f"write / bare: {report['write_vs_bare']:.2f}"
+    )
 
 
 if __name__ == "__main__":

@@ -86,8 +86,7 @@ def eval_skin(surface: registration.Surface, world: np.ndarray) -> np.ndarray:
     """The follow-up's healthy skin for scoring, chosen with the truth's drape plane (not the registration's)."""
     above = apply(world, surface.vertices)[:, 2] > DRAPE_CLEARANCE_MM
     conf = TrackingConfig(burn_margin_mm=EVAL_RING_MM[0])
-    keep = registration.skin_mask(conf, surface, surface.burn_points, EVAL_RING_MM[1], [surface.burn_points],
-                                  above)  # fmt: skip
+    keep = registration.skin_mask(conf, surface, surface.burn_points, EVAL_RING_MM[1], [surface.burn_points], above)
     return surface.vertices[keep]
 
 
@@ -144,12 +143,18 @@ def run_one(name: str, root: Path, work: Path, masks: str) -> dict:
     rows = []
     for i, (entry, row) in enumerate(zip(listing, result["sessions"], strict=True)):
         true_change = 100 * (entry["area_ratio_vs_day0"] - 1)
-        out = {"session": entry["dir"], "day": entry["day"], "true_area_cm2": round(entry["burn_area_cm2"], 3),
-               "area_cm2": row["area_cm2"], "true_area_change_pct": round(true_change, 2),
-               "area_change_pct": row["area_change_percent"],
-               "area_change_err_pp": None if row["area_change_percent"] is None
-               else round(row["area_change_percent"] - true_change, 2),
-               "frame_fit_rms_mm": round(frames[i][1], 3)}  # fmt: skip
+        out = {
+            "session": entry["dir"],
+            "day": entry["day"],
+            "true_area_cm2": round(entry["burn_area_cm2"], 3),
+            "area_cm2": row["area_cm2"],
+            "true_area_change_pct": round(true_change, 2),
+            "area_change_pct": row["area_change_percent"],
+            "area_change_err_pp": None
+            if row["area_change_percent"] is None
+            else round(row["area_change_percent"] - true_change, 2),
+            "frame_fit_rms_mm": round(frames[i][1], 3),
+        }
         if i > 0 and row["transform_to_baseline"] is not None:
             follow = registration.load_surface(analyses[i] / track.SURFACE, analyses[i] / track.MESH)
             truth = (
@@ -161,22 +166,28 @@ def run_one(name: str, root: Path, work: Path, masks: str) -> dict:
             shape_seconds = time.perf_counter() - started
             out |= {
                 "registration_err_mm": round(rms_apart(np.array(row["transform_to_baseline"]), truth, skin), 3),
-                "reported_rmse_mm": row["registration_rmse_mm"], "overlap": row["registration_overlap"],
-                "warning": row["registration_warning"], "eval_points": len(skin),
+                "reported_rmse_mm": row["registration_rmse_mm"],
+                "overlap": row["registration_overlap"],
+                "warning": row["registration_warning"],
+                "eval_points": len(skin),
                 "baseline_identity_err_mm": round(rms_apart(np.eye(4), truth, skin), 2),
                 "baseline_icp_only_err_mm": round(rms_apart(icp_only(conf, base, follow), truth, skin), 2),
                 "baseline_shape_only_err_mm": round(rms_apart(np.array(shape.transform_to_baseline), truth, skin), 3),
                 "baseline_shape_only_agreeing": f"{shape.ransac_agreeing}/{shape.ransac_tries}",
                 "baseline_shape_only_seconds": round(shape_seconds, 1),
-            }  # fmt: skip
+            }
         rows.append(out)
     days = [e["day"] for e in listing]
-    return {"series": name, "masks": masks, "rows": rows,
-            "true_rate_cm2_per_day": round(least_squares_rate(days, [e["burn_area_cm2"] for e in listing]), 4),
-            "rate_cm2_per_day": result["healing_rate_cm2_per_day"],
-            "projected_closure_day": result["projected_closure_day"],
-            "projected_closure_range_days": result["projected_closure_range_days"],
-            "track_seconds": round(seconds, 1)}  # fmt: skip
+    return {
+        "series": name,
+        "masks": masks,
+        "rows": rows,
+        "true_rate_cm2_per_day": round(least_squares_rate(days, [e["burn_area_cm2"] for e in listing]), 4),
+        "rate_cm2_per_day": result["healing_rate_cm2_per_day"],
+        "projected_closure_day": result["projected_closure_day"],
+        "projected_closure_range_days": result["projected_closure_range_days"],
+        "track_seconds": round(seconds, 1),
+    }
 
 
 def main() -> None:
@@ -195,8 +206,11 @@ def main() -> None:
             for row in report["rows"]:
                 print(json.dumps({"series": name, "masks": masks, **row}), flush=True)
             print(json.dumps({k: v for k, v in report.items() if k != "rows"}), flush=True)
-    summary = {"date": dt.date.today().isoformat(),
-               "machine": f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores", "reports": reports}  # fmt: skip
+    summary = {
+        "date": dt.date.today().isoformat(),
+        "machine": f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores",
+        "reports": reports,
+    }
     (work / "healing_track.json").write_text(json.dumps(summary, indent=2))
 
 

@@ -30,9 +30,14 @@ class LoadResult:
         return data[min(len(data) - 1, int(q / 100 * len(data)))] if data else float("nan")
 
     def row(self) -> dict:
-        return {"requests": self.requests, "errors": self.errors, "rps": round(self.rps, 1),
-                "p50_ms": round(self.percentile(50), 2), "p99_ms": round(self.percentile(99), 2),
-                "mean_ms": round(statistics.fmean(self.latencies_ms), 2) if self.latencies_ms else None}  # fmt: skip
+        return {
+            "requests": self.requests,
+            "errors": self.errors,
+            "rps": round(self.rps, 1),
+            "p50_ms": round(self.percentile(50), 2),
+            "p99_ms": round(self.percentile(99), 2),
+            "mean_ms": round(statistics.fmean(self.latencies_ms), 2) if self.latencies_ms else None,
+        }
 
 
 RequestFactory = Callable[[int, dict], bytes]
@@ -52,8 +57,9 @@ async def _read_response(reader: asyncio.StreamReader) -> tuple[int, dict[str, s
     return status, headers, body
 
 
-async def _worker(i: int, host: str, port: int, make: RequestFactory, on_response, stop_at: float, warm_until: float,
-                  out: LoadResult) -> None:  # fmt: skip
+async def _worker(
+    i: int, host: str, port: int, make: RequestFactory, on_response, stop_at: float, warm_until: float, out: LoadResult
+) -> None:
     reader, writer = await asyncio.open_connection(host, port)
     state: dict = {}
     try:
@@ -74,13 +80,25 @@ async def _worker(i: int, host: str, port: int, make: RequestFactory, on_respons
 async def _run(host, port, make, on_response, connections, seconds, warmup) -> LoadResult:
     start = time.perf_counter()
     out = LoadResult(0, 0, seconds, [])
-    await asyncio.gather(*(_worker(i, host, port, make, on_response, start + warmup + seconds, start + warmup, out)
-                           for i in range(connections)))  # fmt: skip
+    await asyncio.gather(
+        *(
+            _worker(i, host, port, make, on_response, start + warmup + seconds, start + warmup, out)
+            for i in range(connections)
+        )
+    )
     return out
 
 
-def run_load(port: int, make: RequestFactory, on_response=None, *, connections: int = 16, seconds: float = 8.0,
-             warmup: float = 2.0, host: str = "127.0.0.1") -> LoadResult:  # fmt: skip
+def run_load(
+    port: int,
+    make: RequestFactory,
+    on_response=None,
+    *,
+    connections: int = 16,
+    seconds: float = 8.0,
+    warmup: float = 2.0,
+    host: str = "127.0.0.1",
+) -> LoadResult:
     def default_check(i, state, status, headers, body) -> bool:
         return 200 <= status < 300
 

@@ -48,8 +48,9 @@ def _loop(config: Config, dense: str, out: str, runs: int, counter: str) -> None
 
 def stress(config: Config, dense: Path, runs: int, threads: int) -> tuple[int, list[float]]:
     """(crashes, seconds per finished run) for `runs` meshings with `threads` threads."""
-    conf = msgspec.structs.replace(config, reconstruction=msgspec.structs.replace(config.reconstruction,
-                                                                                  mesh_threads=threads))  # fmt: skip
+    conf = msgspec.structs.replace(
+        config, reconstruction=msgspec.structs.replace(config.reconstruction, mesh_threads=threads)
+    )
     context = multiprocessing.get_context("spawn")
     crashes = 0
     with tempfile.TemporaryDirectory() as work:
@@ -74,8 +75,10 @@ def main() -> None:
     parser.add_argument("--work", type=Path, help="keep the reconstructions here (default: a temporary folder)")
     args = parser.parse_args()
     config = Config()
-    print(f"{dt.date.today()}, {platform.machine()}, {multiprocessing.cpu_count()} cores, Open3D "
-          f"{__import__('open3d').__version__}")  # fmt: skip
+    print(
+        f"{dt.date.today()}, {platform.machine()}, {multiprocessing.cpu_count()} cores, Open3D "
+        f"{__import__('open3d').__version__}"
+    )
     print("| phantom | mesh_threads | runs | crashes | median s/run |")
     print("|---|---|---|---|---|")
     with tempfile.TemporaryDirectory() as tmp:

@@ -11,8 +11,9 @@ import numpy as np
 SHARED = Path(__file__).resolve().parents[2] / "shared" / "phantoms"
 
 
-def make_phone_video(path: Path, seconds: float = 10.0, size: tuple[int, int] = (1920, 1080), fps: int = 30, *,
-                     bframes: int = 0) -> Path:  # fmt: skip
+def make_phone_video(
+    path: Path, seconds: float = 10.0, size: tuple[int, int] = (1920, 1080), fps: int = 30, *, bframes: int = 0
+) -> Path:
     """Pans across an upscaled phantom view, with sensor noise, like a hand-held clip.
 
     bframes=0 is what phones' hardware encoders usually write (I and P frames only).

@@ -62,10 +62,14 @@ def skull_row(work: Path, thorough: bool) -> dict:
     models = sfm.incremental_map(conf, folder, names, database, work / "models")
     best = models[0]
     return {
-        "set": "skull-multiview", "settings": "thorough" if thorough else "default", "views": len(names), "registered": best.num_reg_images(), "models": len(models),
+        "set": "skull-multiview",
+        "settings": "thorough" if thorough else "default",
+        "views": len(names),
+        "registered": best.num_reg_images(),
+        "models": len(models),
         "mean_reprojection_px": round(best.compute_mean_reprojection_error(), 3),
         "seconds": round(time.perf_counter() - t, 1),
-    }  # fmt: skip
+    }
 
 
 def main() -> None:
@@ -95,15 +99,22 @@ def main() -> None:
                 skull.append(skull_row(Path(tmp) / f"skull{int(thorough)}", thorough))
                 print(json.dumps(skull[-1]), flush=True)
     done = [r for r in rows if "surface_median_mm" in r]
-    print(json.dumps({
-        "date": dt.date.today().isoformat(), "machine": f"{platform.machine()}, {os.cpu_count()} cores",
-        "worst_surface_median_mm": max((r["surface_median_mm"] for r in done), default=None),
-        "worst_surface_p95_mm": max((r["surface_p95_mm"] for r in done), default=None),
-        "worst_abs_scale_error": max((abs(r["scale_error"]) for r in done), default=None),
-        "min_registered_share": min((r["registered"] / r["views"] for r in done), default=None),
-        "median_seconds": float(np.median([r["seconds"] for r in done])) if done else None,
-        "rows": rows, "skull": skull,
-    }, indent=2))  # fmt: skip
+    print(
+        json.dumps(
+            {
+                "date": dt.date.today().isoformat(),
+                "machine": f"{platform.machine()}, {os.cpu_count()} cores",
+                "worst_surface_median_mm": max((r["surface_median_mm"] for r in done), default=None),
+                "worst_surface_p95_mm": max((r["surface_p95_mm"] for r in done), default=None),
+                "worst_abs_scale_error": max((abs(r["scale_error"]) for r in done), default=None),
+                "min_registered_share": min((r["registered"] / r["views"] for r in done), default=None),
+                "median_seconds": float(np.median([r["seconds"] for r in done])) if done else None,
+                "rows": rows,
+                "skull": skull,
+            },
+            indent=2,
+        )
+    )
 
 
 if __name__ == "__main__":

@@ -52,8 +52,12 @@ def _child(args: list[str]) -> tuple[float, int, str]:
 
 def render(out: Path) -> float:
     t = time.perf_counter()
-    subprocess.run([sys.executable, "-m", "gateway.cli", "phantom", "--out", str(out), "--views", "12", "--seed", "1"],
-                   cwd=REPO, check=True, capture_output=True)  # fmt: skip
+    subprocess.run(
+        [sys.executable, "-m", "gateway.cli", "phantom", "--out", str(out), "--views", "12", "--seed", "1"],
+        cwd=REPO,
+        check=True,
+        capture_output=True,
+    )
     return time.perf_counter() - t
 
 
@@ -78,17 +82,31 @@ def main() -> None:
             )
             report = json.loads(out_p)
             stages = {t["stage"]: t["seconds"] for t in report["timings"]}
-            rows.append({
-                "pipeline_s": round(wall, 1), "stages_s": stages, "pipeline_peak_mb": rss,
-                "registered": report["sfm"]["images_registered"], "used": report["sfm"]["images_used"],
-                "baseline_sparse_s": round(float(seconds_b), 1), "baseline_process_s": round(wall_b, 1),
-                "baseline_registered": int(registered_b), "baseline_peak_mb": rss_b,
-                "ratio_pipeline_to_sparse": round(wall / wall_b, 2),
-            })  # fmt: skip
-    print(json.dumps({
-        "date": dt.date.today().isoformat(), "machine": f"{platform.machine()}, {os.cpu_count()} cores",
-        "goal": "pipeline <= 120 s, peak < 4096 MB", "runs": rows,
-    }, indent=2))  # fmt: skip
+            rows.append(
+                {
+                    "pipeline_s": round(wall, 1),
+                    "stages_s": stages,
+                    "pipeline_peak_mb": rss,
+                    "registered": report["sfm"]["images_registered"],
+                    "used": report["sfm"]["images_used"],
+                    "baseline_sparse_s": round(float(seconds_b), 1),
+                    "baseline_process_s": round(wall_b, 1),
+                    "baseline_registered": int(registered_b),
+                    "baseline_peak_mb": rss_b,
+                    "ratio_pipeline_to_sparse": round(wall / wall_b, 2),
+                }
+            )
+    print(
+        json.dumps(
+            {
+                "date": dt.date.today().isoformat(),
+                "machine": f"{platform.machine()}, {os.cpu_count()} cores",
+                "goal": "pipeline <= 120 s, peak < 4096 MB",
+                "runs": rows,
+            },
+            indent=2,
+        )
+    )
 
 
 if __name__ == "__main__":

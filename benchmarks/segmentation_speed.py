@@ -45,9 +45,15 @@ def measure(photos: list[Path], segmenter: BurnSegmenter, repeat: int, crop: boo
         box = Box.around(w / 2, h / 2, min(h, w) / 3, w, h) if crop else None
         model_ms.append(timed(lambda r=rgb, b=box: segmenter.probability(r, b), repeat))
     read, model = statistics.median(read_ms), statistics.median(model_ms)
-    return {"photos": len(photos), "size": f"{w}x{h}", "view": "crop" if crop else "whole picture",
-            "model_ms_median": round(model, 1), "model_ms_p90": round(float(np.percentile(model_ms, 90)), 1),
-            "read_photo_ms_median": round(read, 1), "model_over_read": round(model / read, 2)}  # fmt: skip
+    return {
+        "photos": len(photos),
+        "size": f"{w}x{h}",
+        "view": "crop" if crop else "whole picture",
+        "model_ms_median": round(model, 1),
+        "model_ms_p90": round(float(np.percentile(model_ms, 90)), 1),
+        "read_photo_ms_median": round(read, 1),
+        "model_over_read": round(model / read, 2),
+    }
 
 
 def main() -> None:
@@ -57,11 +63,17 @@ def main() -> None:
     args = parser.parse_args()
     os.sched_setaffinity(0, {min(os.sched_getaffinity(0))})
     segmenter = BurnSegmenter(SHIPPED_MODEL, threads=1)
-    sets = [(sorted((SHARED / "datasets" / "fuseg2021-train" / "images").glob("*.jpg"))[: args.count], False),
-            (sorted((SHARED / "phantoms" / "p1_forearm" / "images").glob("*.jpg"))[: args.count], True)]  # fmt: skip
+    sets = [
+        (sorted((SHARED / "datasets" / "fuseg2021-train" / "images").glob("*.jpg"))[: args.count], False),
+        (sorted((SHARED / "phantoms" / "p1_forearm" / "images").glob("*.jpg"))[: args.count], True),
+    ]
     rows = [measure(photos, segmenter, args.repeat, crop) for photos, crop in sets if photos]
-    report = {"date": dt.date.today().isoformat(), "machine": f"{platform.processor() or platform.machine()}, "
-              "pinned to 1 core", "model_input": segmenter.input_size, "rows": rows}  # fmt: skip
+    report = {
+        "date": dt.date.today().isoformat(),
+        "machine": f"{platform.processor() or platform.machine()}, pinned to 1 core",
+        "model_input": segmenter.input_size,
+        "rows": rows,
+    }
     print(json.dumps(report, indent=2))
 
 

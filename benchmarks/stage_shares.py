@@ -39,8 +39,15 @@ def profile_metrics(config: Config, out: Path, mm_per_unit: float | None) -> str
     views = surface_map.output_views(paths["sfm_model"], paths["scale"])
     profiler = cProfile.Profile()
     with tempfile.TemporaryDirectory() as tmp:
-        profiler.runcall(measure.run, config.analysis, out / "surface" / surface_map.ARRAYS, mm_per_unit,
-                         dense.units_per_mm, views, Path(tmp))  # fmt: skip
+        profiler.runcall(
+            measure.run,
+            config.analysis,
+            out / "surface" / surface_map.ARRAYS,
+            mm_per_unit,
+            dense.units_per_mm,
+            views,
+            Path(tmp),
+        )
     text = io.StringIO()
     pstats.Stats(profiler, stream=text).sort_stats("cumulative").print_stats(10)
     return text.getvalue()
@@ -58,8 +65,10 @@ def main() -> None:
         started = time.perf_counter()
         result = analyze(config, phantom / "images", out, masks=phantom / "masks")
         wall = time.perf_counter() - started
-        print(f"{dt.date.today()}, {platform.machine()}, {os.cpu_count()} cores; {args.phantom}: {result.status.value},"
-              f" area {result.metrics.area_cm2} cm2, {wall:.1f} s wall")  # fmt: skip
+        print(
+            f"{dt.date.today()}, {platform.machine()}, {os.cpu_count()} cores; {args.phantom}: {result.status.value},"
+            f" area {result.metrics.area_cm2} cm2, {wall:.1f} s wall"
+        )
         total = sum(result.timings_s.values())
         sfm = result.timings_s.get("sfm") or float("nan")
         print("| stage | seconds | share | x SfM |")

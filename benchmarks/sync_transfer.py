@@ -80,8 +80,15 @@ def bundle_runs(sites: Sites, encounter_ids: list[str], chunk_kib: int, window: 
             t2 = time.perf_counter()
             if report.delivered != [entry.bundle_id]:
                 raise RuntimeError(f"bundle {entry.bundle_id} not delivered: {report}")
-            runs.append({"bytes": entry.bytes, "chunks": entry.chunks, "queue_s": t1 - t0, "send_s": t2 - t1,
-                         "total_s": t2 - t0})  # fmt: skip
+            runs.append(
+                {
+                    "bytes": entry.bytes,
+                    "chunks": entry.chunks,
+                    "queue_s": t1 - t0,
+                    "send_s": t2 - t1,
+                    "total_s": t2 - t0,
+                }
+            )
     finally:
         db.close()
     return runs
@@ -142,11 +149,22 @@ def loopback(work: Path, mb: float, repeat: int, chunk_kib: int, window: int) ->
     raw = raw_put_runs(nbytes, chunk_kib * 1024, repeat)
     med = {k: statistics.median(r[k] for r in runs) for k in ("queue_s", "send_s", "total_s")}
     raw_s = statistics.median(raw)
-    return {"bytes": nbytes, "chunks": runs[0]["chunks"], "chunk_kib": chunk_kib, "window_chunks": window,
-            "bundle_queue_s": med["queue_s"], "bundle_send_s": med["send_s"], "bundle_total_s": med["total_s"],
-            "bundle_mb_s": nbytes / med["total_s"] / 1e6, "bundle_send_only_mb_s": nbytes / med["send_s"] / 1e6,
-            "raw_put_s": raw_s, "raw_put_mb_s": nbytes / raw_s / 1e6, "ratio": raw_s / med["total_s"],
-            "runs": runs, "raw_runs_s": raw}  # fmt: skip
+    return {
+        "bytes": nbytes,
+        "chunks": runs[0]["chunks"],
+        "chunk_kib": chunk_kib,
+        "window_chunks": window,
+        "bundle_queue_s": med["queue_s"],
+        "bundle_send_s": med["send_s"],
+        "bundle_total_s": med["total_s"],
+        "bundle_mb_s": nbytes / med["total_s"] / 1e6,
+        "bundle_send_only_mb_s": nbytes / med["send_s"] / 1e6,
+        "raw_put_s": raw_s,
+        "raw_put_mb_s": nbytes / raw_s / 1e6,
+        "ratio": raw_s / med["total_s"],
+        "runs": runs,
+        "raw_runs_s": raw,
+    }
 
 
 def slow_link(work: Path) -> dict:
@@ -172,9 +190,17 @@ def slow_link(work: Path) -> dict:
     with sqlite3.connect(sites.center.env["BURNEDGE_CENTRAL_DATABASE"]) as db:
         assert db.execute("SELECT COUNT(*) FROM bundles").fetchone()[0] == 1
     ideal = row["bytes"] * 8 / (RATE_KBIT * 1000)
-    return {"link": kind, "rate_kbit": RATE_KBIT, "bytes": row["bytes"], "chunks": row["chunks"],
-            "delivered_s": took, "first_progress_s": first_ack, "ideal_s": ideal, "ratio": took / ideal,
-            "attempts": row["attempts"]}  # fmt: skip
+    return {
+        "link": kind,
+        "rate_kbit": RATE_KBIT,
+        "bytes": row["bytes"],
+        "chunks": row["chunks"],
+        "delivered_s": took,
+        "first_progress_s": first_ack,
+        "ideal_s": ideal,
+        "ratio": took / ideal,
+        "attempts": row["attempts"],
+    }
 
 
 def main() -> None:
@@ -189,8 +215,10 @@ def main() -> None:
     figures: dict = {"date": dt.date.today().isoformat(), "machine": f"{platform.machine()}, {os.cpu_count()} cores"}
     with tempfile.TemporaryDirectory() as tmp:
         lo = figures["loopback"] = loopback(Path(tmp) / "loopback", args.mb, args.repeat, args.chunk_kib, args.window)
-    print(f"(a) loopback, {lo['bytes'] / 1e6:.2f} MB encrypted in {lo['chunks']} chunks of {lo['chunk_kib']} KiB, "
-          f"window {lo['window_chunks']}, median of {args.repeat}")  # fmt: skip
+    print(
+        f"(a) loopback, {lo['bytes'] / 1e6:.2f} MB encrypted in {lo['chunks']} chunks of {lo['chunk_kib']} KiB, "
+        f"window {lo['window_chunks']}, median of {args.repeat}"
+    )
     print(f"{'':<40}{'seconds':>10}{'MB/s':>10}")
     print(f"{'raw Zenoh put (baseline)':<40}{lo['raw_put_s']:>10.3f}{lo['raw_put_mb_s']:>10.1f}")
     print(f"{'bundle: queue (snapshot, seal, fsync)':<40}{lo['bundle_queue_s']:>10.3f}")

@@ -46,7 +46,7 @@ def create_app(config: Config, *, start_workers: bool = False) -> Litestar:
             AssetController,
             AnalysisController,
             TransferController,
-        ],  # fmt: skip
+        ],
         dependencies={
             "services": Provide(provide_services, sync_to_thread=False, use_cache=True),
         },

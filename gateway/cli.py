@@ -29,8 +29,15 @@ EXIT_CODES: list[tuple[type[BurnedgeError], int]] = [
 def _config(args: argparse.Namespace) -> Config:
     config = load_config(args.config)
     gateway = config.gateway
-    overrides = {k: v for k, v in {"database": args.db, "host": getattr(args, "host", None),
-                                   "port": getattr(args, "port", None)}.items() if v is not None}  # fmt: skip
+    overrides = {
+        k: v
+        for k, v in {
+            "database": args.db,
+            "host": getattr(args, "host", None),
+            "port": getattr(args, "port", None),
+        }.items()
+        if v is not None
+    }
     if overrides:
         gateway = msgspec.structs.replace(gateway, **overrides)
     return msgspec.structs.replace(config, gateway=gateway)
@@ -57,10 +64,14 @@ def cmd_demo(args: argparse.Namespace) -> int:
     from gateway.demo_series import SeriesOptions, run_demo
 
     width, height = _size(args.size)
-    folder = Path(args.phantoms) if args.phantoms else Path(config.gateway.database).resolve().parent / \
-        "burnedge-demo-phantoms"  # fmt: skip
-    options = SeriesOptions(folder=folder, views=args.views, width=width, height=height,
-                            clinician_masks=args.clinician_masks)  # fmt: skip
+    folder = (
+        Path(args.phantoms)
+        if args.phantoms
+        else Path(config.gateway.database).resolve().parent / "burnedge-demo-phantoms"
+    )
+    options = SeriesOptions(
+        folder=folder, views=args.views, width=width, height=height, clinician_masks=args.clinician_masks
+    )
     run_demo(config, options, passwords["clinician"], keep_serving=not args.exit)
     return 0
 
@@ -141,10 +152,21 @@ def cmd_frames(args: argparse.Namespace) -> int:
     for frame in result.frames:
         name = f"{video.stem}_{frame.time_s:08.3f}s.jpg"
         (out / name).write_bytes(frame.jpeg)
-        listing.append({"file": name, "time_s": frame.time_s, "sharpness": frame.sharpness,
-                        "verdict": msgspec.to_builtins(msgspec.structs.replace(frame.verdict, file=name))})  # fmt: skip
-    summary = {"video": str(video), "frames": listing, "decoded": result.decoded,
-               "skipped_near_duplicates_s": result.skipped_duplicates, "seconds": round(result.seconds, 3)}  # fmt: skip
+        listing.append(
+            {
+                "file": name,
+                "time_s": frame.time_s,
+                "sharpness": frame.sharpness,
+                "verdict": msgspec.to_builtins(msgspec.structs.replace(frame.verdict, file=name)),
+            }
+        )
+    summary = {
+        "video": str(video),
+        "frames": listing,
+        "decoded": result.decoded,
+        "skipped_near_duplicates_s": result.skipped_duplicates,
+        "seconds": round(result.seconds, 3),
+    }
     (out / "frames.json").write_text(json.dumps(summary, indent=2) + "\n")
     print(
         json.dumps(
@@ -173,12 +195,21 @@ def cmd_phantom(args: argparse.Namespace) -> int:
     from processing.phantom.generate import run, run_series
     from schemas.phantom import PhantomSpec
 
-    given = {"shape": args.shape, "views": args.views, "width": args.width, "height": args.height, "seed": args.seed,
-             "area_cm2": args.area_cm2, "depth_mm": args.depth_mm, "tone": args.tone,
-             "burn_look": args.burn_look}  # fmt: skip
+    given = {
+        "shape": args.shape,
+        "views": args.views,
+        "width": args.width,
+        "height": args.height,
+        "seed": args.seed,
+        "area_cm2": args.area_cm2,
+        "depth_mm": args.depth_mm,
+        "tone": args.tone,
+        "burn_look": args.burn_look,
+    }
     try:
-        spec = msgspec.convert({k: v for k, v in given.items() if v is not None} | {"exif": not args.no_exif},
-                               PhantomSpec)  # fmt: skip
+        spec = msgspec.convert(
+            {k: v for k, v in given.items() if v is not None} | {"exif": not args.no_exif}, PhantomSpec
+        )
     except msgspec.ValidationError as exc:
         raise InvalidInput(f"{exc} (see `burnedge phantom --help` for the ranges)") from exc
     path = (run_series if args.series else run)(spec, Path(args.out))
@@ -205,64 +236,106 @@ def _global_options_after_commands(parser: argparse.ArgumentParser) -> None:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="burnedge", description="Objective burn assessment at the clinic edge.",
-                                     **examples("burnedge demo", "burnedge serve --host 0.0.0.0",
-                                                "burnedge users add --username admin --role admin",
-                                                "burnedge --config /etc/burnedge/burnedge.toml audit verify",
-                                                "burnedge COMMAND --help   # each command's options and examples"))  # fmt: skip
+    parser = argparse.ArgumentParser(
+        prog="burnedge",
+        description="Objective burn assessment at the clinic edge.",
+        **examples(
+            "burnedge demo",
+            "burnedge serve --host 0.0.0.0",
+            "burnedge users add --username admin --role admin",
+            "burnedge --config /etc/burnedge/burnedge.toml audit verify",
+            "burnedge COMMAND --help   # each command's options and examples",
+        ),
+    )
     _global_options(parser, None)
     parser.add_argument("--version", action="version", version=f"burnedge {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
-    serve = sub.add_parser("serve", help="run the gateway HTTP API", **examples(
-        "burnedge serve", "burnedge serve --host 0.0.0.0 --port 8080   # phones on the clinic network",
-        "burnedge --config /etc/burnedge/burnedge.toml serve"))  # fmt: skip
-    serve.add_argument("--host", help="address to listen on (default [gateway] host, 127.0.0.1; 0.0.0.0 for the "
-                       "clinic network)")  # fmt: skip
+    serve = sub.add_parser(
+        "serve",
+        help="run the gateway HTTP API",
+        **examples(
+            "burnedge serve",
+            "burnedge serve --host 0.0.0.0 --port 8080   # phones on the clinic network",
+            "burnedge --config /etc/burnedge/burnedge.toml serve",
+        ),
+    )
+    serve.add_argument(
+        "--host", help="address to listen on (default [gateway] host, 127.0.0.1; 0.0.0.0 for the clinic network)"
+    )
     serve.add_argument("--port", type=int, help="TCP port (default [gateway] port, 8080)")
     serve.set_defaults(func=cmd_serve)
 
-    demo = sub.add_parser("demo", help="the whole system on this machine: demo patients, a 4-visit burn series "
-                                       "uploaded, analysed and aligned through the real gateway, then serve it",
-                          **examples("burnedge demo", "burnedge demo --exit --views 6 --size 960x720",
-                                     "burnedge demo --no-series --port 8081"))  # fmt: skip
+    demo = sub.add_parser(
+        "demo",
+        help="the whole system on this machine: demo patients, a 4-visit burn series "
+        "uploaded, analysed and aligned through the real gateway, then serve it",
+        **examples(
+            "burnedge demo", "burnedge demo --exit --views 6 --size 960x720", "burnedge demo --no-series --port 8081"
+        ),
+    )
     demo.add_argument("--host", help="address to listen on")
     demo.add_argument("--port", type=int, help="TCP port (default 8080)")
-    demo.add_argument("--exit", "--no-serve", dest="exit", action="store_true",
-                      help="exit after the summary instead of leaving the gateway running")  # fmt: skip
+    demo.add_argument(
+        "--exit",
+        "--no-serve",
+        dest="exit",
+        action="store_true",
+        help="exit after the summary instead of leaving the gateway running",
+    )
     demo.add_argument("--no-series", action="store_true", help="seed the records only; no phantom series or analyses")
     demo.add_argument("--views", type=int, default=8, help="photos per visit, 6-20 (default 8)")
     demo.add_argument("--size", default="1280x960", help="photo size WIDTHxHEIGHT (default 1280x960)")
     demo.add_argument("--phantoms", metavar="DIR", help="where the rendered series is kept (burnedge-demo-phantoms)")
-    demo.add_argument("--clinician-masks", action="store_true",
-                      help="send the phantom's exact burn masks as a clinician's instead of using the model")  # fmt: skip
+    demo.add_argument(
+        "--clinician-masks",
+        action="store_true",
+        help="send the phantom's exact burn masks as a clinician's instead of using the model",
+    )
     demo.set_defaults(func=cmd_demo)
 
-    worker = sub.add_parser("worker", help="run queued analyses (beside a gateway started with [jobs] workers = 0)",
-                            **examples("burnedge worker", "burnedge --config /etc/burnedge/burnedge.toml worker --drain"))  # fmt: skip
+    worker = sub.add_parser(
+        "worker",
+        help="run queued analyses (beside a gateway started with [jobs] workers = 0)",
+        **examples("burnedge worker", "burnedge --config /etc/burnedge/burnedge.toml worker --drain"),
+    )
     worker.add_argument("--drain", action="store_true", help="exit once no queued analysis is ready to run")
     worker.set_defaults(func=cmd_worker)
 
-    gate = sub.add_parser("gate", help="quality verdicts for photos, as JSON (no server needed)",
-                          **examples("burnedge gate IMG_0412.jpg", "burnedge gate visit1/*.jpg"))  # fmt: skip
+    gate = sub.add_parser(
+        "gate",
+        help="quality verdicts for photos, as JSON (no server needed)",
+        **examples("burnedge gate IMG_0412.jpg", "burnedge gate visit1/*.jpg"),
+    )
     gate.add_argument("files", nargs="+", metavar="FILE", help="JPEG, PNG or HEIC photos")
     gate.set_defaults(func=cmd_gate)
 
-    frames = sub.add_parser("frames", help="extract a multi-view set of frames from a video (no server needed)",
-                            **examples("burnedge frames arm.mp4 --out arm-frames"))  # fmt: skip
+    frames = sub.add_parser(
+        "frames",
+        help="extract a multi-view set of frames from a video (no server needed)",
+        **examples("burnedge frames arm.mp4 --out arm-frames"),
+    )
     frames.add_argument("video", metavar="VIDEO", help="MP4 or MOV, H.264 or HEVC")
     frames.add_argument("--out", required=True, metavar="DIR", help="folder for the frames and frames.json")
     frames.set_defaults(func=cmd_frames)
 
-    rec = sub.add_parser("reconstruct", help="photos or a video -> scaled 3D surface mesh (PLY, GLB) and report",
-                         **examples("burnedge reconstruct visit1/ --out visit1-3d", "burnedge reconstruct arm.mp4 --out "
-                                    "arm-3d --ruler ruler.json --fresh"))  # fmt: skip
+    rec = sub.add_parser(
+        "reconstruct",
+        help="photos or a video -> scaled 3D surface mesh (PLY, GLB) and report",
+        **examples(
+            "burnedge reconstruct visit1/ --out visit1-3d",
+            "burnedge reconstruct arm.mp4 --out arm-3d --ruler ruler.json --fresh",
+        ),
+    )
     rec.add_argument("source", metavar="SOURCE", help="folder of photos, or a video (MP4, MOV)")
     rec.add_argument("--out", required=True, metavar="DIR", help="analysis folder; an interrupted run resumes there")
     rec.add_argument("--ruler", metavar="FILE", help="JSON with two ruler points marked in 2+ pictures (no marker)")
     rec.add_argument("--fresh", action="store_true", help="discard what an earlier run left in DIR")
-    rec.add_argument("--no-gate", action="store_true",
-                     help="use every decodable picture, even those the burn-photo quality gate rejects")  # fmt: skip
+    rec.add_argument(
+        "--no-gate",
+        action="store_true",
+        help="use every decodable picture, even those the burn-photo quality gate rejects",
+    )
     rec.set_defaults(func=cmd_reconstruct)
 
     cli_analysis.add_commands(sub, _config)
@@ -270,9 +343,15 @@ def build_parser() -> argparse.ArgumentParser:
     cli_backup.add_commands(sub, _config)
     cli_users.add_commands(sub, _config)
 
-    phantom = sub.add_parser("phantom", help="render a burn phantom: multi-view photos with exact ground truth",
-                             **examples("burnedge phantom --out phantom1", "burnedge phantom --out series --series",
-                                        "burnedge phantom --out foot --shape foot --views 8 --tone V --area-cm2 20"))  # fmt: skip
+    phantom = sub.add_parser(
+        "phantom",
+        help="render a burn phantom: multi-view photos with exact ground truth",
+        **examples(
+            "burnedge phantom --out phantom1",
+            "burnedge phantom --out series --series",
+            "burnedge phantom --out foot --shape foot --views 8 --tone V --area-cm2 20",
+        ),
+    )
     phantom.add_argument("--out", required=True, metavar="DIR", help="folder for images/, masks/, ground_truth.json")
     phantom.add_argument("--shape", choices=["forearm", "patch", "foot"], help="body part (default forearm)")
     phantom.add_argument("--views", type=int, help="number of photos, 6-20 (default 12)")
@@ -282,23 +361,30 @@ def build_parser() -> argparse.ArgumentParser:
     phantom.add_argument("--area-cm2", type=float, help="burn area, 1-40 cm2 (default 14)")
     phantom.add_argument("--depth-mm", type=float, help="crater depth, 0-8 mm; 0 is a flat burn (default 2)")
     phantom.add_argument("--tone", choices=["I", "II", "III", "IV", "V", "VI"], help="skin type (default III)")
-    phantom.add_argument("--burn-look", choices=["mixed", "superficial", "deep_partial", "full_thickness"],
-                         help="colour and texture of the burn (default mixed)")  # fmt: skip
+    phantom.add_argument(
+        "--burn-look",
+        choices=["mixed", "superficial", "deep_partial", "full_thickness"],
+        help="colour and texture of the burn (default mixed)",
+    )
     phantom.add_argument("--series", action="store_true", help="four sessions (days 0, 7, 14, 21) of a healing burn")
     phantom.add_argument("--no-exif", action="store_true", help="leave the focal length out of the JPEGs' EXIF")
     phantom.set_defaults(func=cmd_phantom)
 
     audit = sub.add_parser("audit", help="the audit trail", **examples("burnedge audit verify")).add_subparsers(
-        dest="audit_cmd", required=True)  # fmt: skip
-    verify = audit.add_parser("verify", help="check the hash chain; names the first broken entry (exit 6)",
-                              **examples("burnedge audit verify", "burnedge --config /etc/burnedge/burnedge.toml audit "
-                                         "verify"))  # fmt: skip
+        dest="audit_cmd", required=True
+    )
+    verify = audit.add_parser(
+        "verify",
+        help="check the hash chain; names the first broken entry (exit 6)",
+        **examples("burnedge audit verify", "burnedge --config /etc/burnedge/burnedge.toml audit verify"),
+    )
     verify.set_defaults(func=cmd_audit_verify)
 
     schemas = sub.add_parser("schemas", help="message schemas", **examples("burnedge schemas export json-schemas"))
     schemas = schemas.add_subparsers(dest="schemas_cmd", required=True)
-    export = schemas.add_parser("export", help="write JSON Schema for every public message",
-                                **examples("burnedge schemas export json-schemas"))  # fmt: skip
+    export = schemas.add_parser(
+        "export", help="write JSON Schema for every public message", **examples("burnedge schemas export json-schemas")
+    )
     export.add_argument("dir", help="output folder")
     export.set_defaults(func=cmd_schemas_export)
     _global_options_after_commands(parser)
@@ -307,8 +393,9 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
-    logging.basicConfig(level=logging.DEBUG if args.verbose else logging.INFO,
-                        format="%(asctime)s %(levelname)s %(name)s: %(message)s")  # fmt: skip
+    logging.basicConfig(
+        level=logging.DEBUG if args.verbose else logging.INFO, format="%(asctime)s %(levelname)s %(name)s: %(message)s"
+    )
     if not args.verbose:  # every scheduler tick and every HTTP request of the demo's client would be logged
         for chatty in ("apscheduler", "httpx"):
             logging.getLogger(chatty).setLevel(logging.WARNING)

@@ -79,15 +79,19 @@ def cmd_segment(args: argparse.Namespace, config: Config) -> int:
     stems = [p.stem for p in photos]
     if len(set(stems)) < len(stems):
         twins = sorted({s for s in stems if stems.count(s) > 1})
-        raise InvalidInput(f"photos share a name but not a type ({', '.join(twins)}): their masks would overwrite "
-                           "each other; rename one of each")  # fmt: skip
+        raise InvalidInput(
+            f"photos share a name but not a type ({', '.join(twins)}): their masks would overwrite "
+            "each other; rename one of each"
+        )
     out.mkdir(parents=True, exist_ok=True)
     segmenter = BurnSegmenter(config.analysis.model, config.analysis.threads)
     for i, photo in enumerate(photos, 1):
         rgb = read_rgb(photo)
         prob = segmenter.probability(rgb)
-        for name, image in ((f"{photo.stem}.png", np.where(prob >= 0.5, 255, 0).astype(np.uint8)),
-                            (f"{photo.stem}.probability.png", np.round(prob * 255).astype(np.uint8))):  # fmt: skip
+        for name, image in (
+            (f"{photo.stem}.png", np.where(prob >= 0.5, 255, 0).astype(np.uint8)),
+            (f"{photo.stem}.probability.png", np.round(prob * 255).astype(np.uint8)),
+        ):
             tmp = out / f".{name}.tmp.png"
             if not cv2.imwrite(str(tmp), image):
                 raise InvalidInput(f"could not write {out / name} (disk full or not writable?)")
@@ -133,8 +137,10 @@ def parse_days(text: str, count: int) -> list[float]:
         raise InvalidInput(f"--days {text}: days count from the injury (or the first visit) and must be 0 or more")
     for earlier, later in zip(days, days[1:], strict=False):
         if later < earlier:
-            raise InvalidInput(f"--days {text}: days must not decrease (day {later:g} after day {earlier:g}); give "
-                               "the visit folders in time order")  # fmt: skip
+            raise InvalidInput(
+                f"--days {text}: days must not decrease (day {later:g} after day {earlier:g}); give "
+                "the visit folders in time order"
+            )
     return days
 
 
@@ -205,22 +211,34 @@ def add_commands(sub, config_of: Callable[[argparse.Namespace], Config]) -> None
     def bind(func):
         return lambda args: func(args, config_of(args))
 
-    seg = sub.add_parser("segment", help="the burn segmentation model alone: one PNG mask per photo",
-                         **examples("burnedge segment visit1/ --out visit1-masks"))  # fmt: skip
+    seg = sub.add_parser(
+        "segment",
+        help="the burn segmentation model alone: one PNG mask per photo",
+        **examples("burnedge segment visit1/ --out visit1-masks"),
+    )
     seg.add_argument("source", metavar="DIR", help="folder of photos")
-    seg.add_argument("--out", required=True, metavar="OUT",
-                     help="folder for STEM.png (255 = burn) and STEM.probability.png")  # fmt: skip
+    seg.add_argument(
+        "--out", required=True, metavar="OUT", help="folder for STEM.png (255 = burn) and STEM.probability.png"
+    )
     seg.set_defaults(func=bind(cmd_segment))
 
-    ana = sub.add_parser("analyze", help="photos or a video -> burn area, perimeter, relief, volume (analysis.json)",
-                         **examples("burnedge analyze visit1/ --out visit1-analysis",
-                                    "burnedge analyze visit1/ --out visit1-analysis --masks visit1-outlines/ "
-                                    "--hours-since-injury 30 --height-cm 160 --weight-kg 55"))  # fmt: skip
+    ana = sub.add_parser(
+        "analyze",
+        help="photos or a video -> burn area, perimeter, relief, volume (analysis.json)",
+        **examples(
+            "burnedge analyze visit1/ --out visit1-analysis",
+            "burnedge analyze visit1/ --out visit1-analysis --masks visit1-outlines/ "
+            "--hours-since-injury 30 --height-cm 160 --weight-kg 55",
+        ),
+    )
     ana.add_argument("source", metavar="DIR", help="folder of photos, or a video (MP4, MOV)")
     ana.add_argument("--out", required=True, metavar="OUT", help="analysis folder; an interrupted run resumes there")
-    ana.add_argument("--masks", metavar="DIR",
-                     help="a person's burn masks (STEM.png, white = burn) or outlines (STEM.json); they replace "
-                          "the model's for those pictures")  # fmt: skip
+    ana.add_argument(
+        "--masks",
+        metavar="DIR",
+        help="a person's burn masks (STEM.png, white = burn) or outlines (STEM.json); they replace "
+        "the model's for those pictures",
+    )
     ana.add_argument("--marker-mm", type=float, help="printed side of each marker square in mm (default 20)")
     ana.add_argument("--ruler", metavar="FILE", help="JSON with two ruler points marked in 2+ pictures (no marker)")
     ana.add_argument("--hours-since-injury", type=float, help="before 72 h the result is marked provisional")
@@ -230,24 +248,48 @@ def add_commands(sub, config_of: Callable[[argparse.Namespace], Config]) -> None
     ana.add_argument("--no-gate", action="store_true", help="use every decodable picture, even rejected ones")
     ana.set_defaults(func=bind(cmd_analyze))
 
-    trk = sub.add_parser("track", help="a burn's visits over time -> changes, healing rate, prompts (track.json)",
-                         **examples("burnedge track day0/ day7/ day14/ day21/ --days 0,7,14,21 --out healing"))  # fmt: skip
-    trk.add_argument("sessions", nargs="+", metavar="SESSION_DIR",
-                     help="one folder per visit, in time order: its photos, or images/ with an optional masks/ "
-                          "(a person's masks, STEM.png)")  # fmt: skip
-    trk.add_argument("--days", required=True, metavar="D,D,...",
-                     help="day of each visit since the injury (or the first visit), e.g. 0,7,14,21")  # fmt: skip
-    trk.add_argument("--out", required=True, metavar="OUT",
-                     help="folder for each visit's analysis (sessions/NN_dayD), the registrations and track.json; "
-                          "an interrupted run resumes there")  # fmt: skip
+    trk = sub.add_parser(
+        "track",
+        help="a burn's visits over time -> changes, healing rate, prompts (track.json)",
+        **examples("burnedge track day0/ day7/ day14/ day21/ --days 0,7,14,21 --out healing"),
+    )
+    trk.add_argument(
+        "sessions",
+        nargs="+",
+        metavar="SESSION_DIR",
+        help="one folder per visit, in time order: its photos, or images/ with an optional masks/ "
+        "(a person's masks, STEM.png)",
+    )
+    trk.add_argument(
+        "--days",
+        required=True,
+        metavar="D,D,...",
+        help="day of each visit since the injury (or the first visit), e.g. 0,7,14,21",
+    )
+    trk.add_argument(
+        "--out",
+        required=True,
+        metavar="OUT",
+        help="folder for each visit's analysis (sessions/NN_dayD), the registrations and track.json; "
+        "an interrupted run resumes there",
+    )
     trk.add_argument("--fresh", action="store_true", help="discard what an earlier run left in OUT")
     trk.set_defaults(func=bind(cmd_track))
 
-    train = sub.add_parser("train-segmentation", help="train the segmentation model on the CPU, export ONNX",
-                           **examples("burnedge train-segmentation --out model/",
-                                      "burnedge train-segmentation --out model/ --recipe recipe.json --epochs 2"))  # fmt: skip
-    train.add_argument("--data", default="../shared/datasets/fuseg2021-train", metavar="DIR",
-                       help="wound photos with images/ and masks/ (default ../shared/datasets/fuseg2021-train)")  # fmt: skip
+    train = sub.add_parser(
+        "train-segmentation",
+        help="train the segmentation model on the CPU, export ONNX",
+        **examples(
+            "burnedge train-segmentation --out model/",
+            "burnedge train-segmentation --out model/ --recipe recipe.json --epochs 2",
+        ),
+    )
+    train.add_argument(
+        "--data",
+        default="../shared/datasets/fuseg2021-train",
+        metavar="DIR",
+        help="wound photos with images/ and masks/ (default ../shared/datasets/fuseg2021-train)",
+    )
     train.add_argument("--out", required=True, metavar="DIR", help="folder for burnseg.onnx and its training report")
     train.add_argument("--cache", metavar="DIR", help="where the rendered training phantoms are kept (OUT/phantoms)")
     train.add_argument("--recipe", metavar="FILE", help="JSON training recipe (see schemas/segmentation.py)")

@@ -43,8 +43,10 @@ def _passphrase(args, config: Config | None, *, confirm: bool) -> str:
             raise InvalidInput(f"the passphrase file {file} is empty")
         return value
     if not sys.stdin.isatty():
-        raise InvalidInput("no passphrase: give --passphrase-file FILE or --passphrase-env NAME (or --recipient / "
-                           "--identity for a key), or run this at a terminal to be asked")  # fmt: skip
+        raise InvalidInput(
+            "no passphrase: give --passphrase-file FILE or --passphrase-env NAME (or --recipient / "
+            "--identity for a key), or run this at a terminal to be asked"
+        )
     value = getpass.getpass("Backup passphrase: ")
     if confirm and getpass.getpass("Again: ") != value:
         raise InvalidInput("the two passphrases differ; nothing was written")
@@ -73,8 +75,9 @@ def cmd_backup(args, config: Config) -> int:
         raise InvalidInput("give --out FILE or --dir DIR, not both")
     folder = args.dir or config.backup.folder
     if not args.out and not folder:
-        raise InvalidInput("where to? give --out FILE, or --dir DIR (or [backup] folder in the config) for "
-                           "rotated backups")  # fmt: skip
+        raise InvalidInput(
+            "where to? give --out FILE, or --dir DIR (or [backup] folder in the config) for rotated backups"
+        )
     encryption = _encryption(args, config)
     removed: list[Path] = []
     if args.out:
@@ -85,10 +88,18 @@ def cmd_backup(args, config: Config) -> int:
     else:
         keep = args.keep if args.keep is not None else config.backup.keep
         target, manifest, removed = writer.rotate(config, Path(folder), keep, encryption)
-    _print({"backup": str(target), "bytes": target.stat().st_size, "files": len(manifest.files),
-            "mode": "recipient" if encryption.recipient else "passphrase", "created_at": manifest.created_at,
-            "audit_head": manifest.audit_head, "skipped": manifest.skipped,
-            "removed": [str(p) for p in removed]})  # fmt: skip
+    _print(
+        {
+            "backup": str(target),
+            "bytes": target.stat().st_size,
+            "files": len(manifest.files),
+            "mode": "recipient" if encryption.recipient else "passphrase",
+            "created_at": manifest.created_at,
+            "audit_head": manifest.audit_head,
+            "skipped": manifest.skipped,
+            "removed": [str(p) for p in removed],
+        }
+    )
     return 0
 
 
@@ -96,9 +107,15 @@ def cmd_keygen(args, config: Config) -> int:
     from gateway.backup.crypto import keygen
 
     public, private, fingerprint = keygen(Path(args.keygen_out))
-    _print({"public_key": str(public), "private_key": str(private), "fingerprint": fingerprint,
+    _print(
+        {
+            "public_key": str(public),
+            "private_key": str(private),
+            "fingerprint": fingerprint,
             "next": f"copy {public} to the gateway and set [backup] recipient to it; move {private} OFF the "
-                    "gateway (a USB stick in a safe, a second copy elsewhere): only it opens the backups"})  # fmt: skip
+            "gateway (a USB stick in a safe, a second copy elsewhere): only it opens the backups",
+        }
+    )
     return 0
 
 
@@ -108,8 +125,10 @@ def _unlock(args) -> Callable[[BackupHeader], FileKey]:
     def unlock(header: BackupHeader) -> FileKey:
         if header.mode == "recipient":
             if not args.identity:
-                raise InvalidInput(f"this backup is encrypted to recipient key {header.recipient.fingerprint}: "
-                                   "give --identity with its private key file (backup-recipient.key.json)")  # fmt: skip
+                raise InvalidInput(
+                    f"this backup is encrypted to recipient key {header.recipient.fingerprint}: "
+                    "give --identity with its private key file (backup-recipient.key.json)"
+                )
             return crypto.recipient_key(Path(args.identity), header.recipient)
         if header.kdf is None:
             raise InvalidInput("the backup's header names no key derivation; use another copy")
@@ -123,17 +142,36 @@ def cmd_restore(args, config: Config) -> int:
 
     if args.check:
         manifest, _, _ = restore.check(Path(args.file), _unlock(args))
-        _print({"checked": args.file, "ok": True, "files": len(manifest.files), "created_at": manifest.created_at,
-                "audit_head": manifest.audit_head, "site_id": manifest.site_id, "skipped": manifest.skipped})  # fmt: skip
+        _print(
+            {
+                "checked": args.file,
+                "ok": True,
+                "files": len(manifest.files),
+                "created_at": manifest.created_at,
+                "audit_head": manifest.audit_head,
+                "site_id": manifest.site_id,
+                "skipped": manifest.skipped,
+            }
+        )
         return 0
     if not args.into:
         raise InvalidInput("give --into DIR (a new, empty folder), or --check to verify only")
     done = restore.restore(Path(args.file), Path(args.into), _unlock(args), force=args.force)
-    _print({"restored": str(done.into), "config": str(done.config), "database": str(done.database),
-            "files": done.files, "bytes": done.bytes, "created_at": done.manifest.created_at,
-            "site_id": done.manifest.site_id, "audit_head": done.manifest.audit_head, "skipped": done.manifest.skipped,
+    _print(
+        {
+            "restored": str(done.into),
+            "config": str(done.config),
+            "database": str(done.database),
+            "files": done.files,
+            "bytes": done.bytes,
+            "created_at": done.manifest.created_at,
+            "site_id": done.manifest.site_id,
+            "audit_head": done.manifest.audit_head,
+            "skipped": done.manifest.skipped,
             "replaced": done.replaced,
-            "next": f"burnedge --config {done.config} audit verify; then burnedge --config {done.config} serve"})  # fmt: skip
+            "next": f"burnedge --config {done.config} audit verify; then burnedge --config {done.config} serve",
+        }
+    )
     return 0
 
 
@@ -147,37 +185,56 @@ def _key_options(parser, *, identity: bool) -> None:
     if identity:
         parser.add_argument("--identity", metavar="FILE", help="private key file of a recipient-key backup")
     else:
-        parser.add_argument("--recipient", metavar="FILE",
-                            help="encrypt to this public key file (`burnedge backup keygen`) instead of a passphrase")  # fmt: skip
+        parser.add_argument(
+            "--recipient",
+            metavar="FILE",
+            help="encrypt to this public key file (`burnedge backup keygen`) instead of a passphrase",
+        )
 
 
 def add_commands(sub, load: Callable[[argparse.Namespace], Config]) -> None:
     def bind(parser, func) -> None:
         parser.set_defaults(func=lambda args: func(args, load(args)))
 
-    backup = sub.add_parser("backup", help="encrypted, consistent copy of the whole gateway state, while it serves",
-                            **examples("burnedge backup --dir /mnt/backups --keep 14",
-                                       "burnedge backup --out state.burnedge-backup --recipient backup-recipient.pub.json",
-                                       "burnedge backup --out state.burnedge-backup --passphrase-file /root/passphrase",
-                                       "BURNEDGE_PASSPHRASE=... burnedge backup --out x.burnedge-backup --passphrase-env "
-                                       "BURNEDGE_PASSPHRASE", "burnedge backup keygen --out keys/"))  # fmt: skip
+    backup = sub.add_parser(
+        "backup",
+        help="encrypted, consistent copy of the whole gateway state, while it serves",
+        **examples(
+            "burnedge backup --dir /mnt/backups --keep 14",
+            "burnedge backup --out state.burnedge-backup --recipient backup-recipient.pub.json",
+            "burnedge backup --out state.burnedge-backup --passphrase-file /root/passphrase",
+            "BURNEDGE_PASSPHRASE=... burnedge backup --out x.burnedge-backup --passphrase-env BURNEDGE_PASSPHRASE",
+            "burnedge backup keygen --out keys/",
+        ),
+    )
     backup.add_argument("--out", metavar="FILE", help="write the backup to FILE (replaced once the new one is whole)")
-    backup.add_argument("--dir", metavar="DIR", help="write a dated backup into DIR and keep the newest N there "
-                                                     "(default: [backup] folder)")  # fmt: skip
+    backup.add_argument(
+        "--dir",
+        metavar="DIR",
+        help="write a dated backup into DIR and keep the newest N there (default: [backup] folder)",
+    )
     backup.add_argument("--keep", type=int, metavar="N", help="backups kept in DIR (default: [backup] keep)")
     _key_options(backup, identity=False)
     bind(backup, cmd_backup)
     backup_sub = backup.add_subparsers(dest="backup_cmd", metavar="SUBCOMMAND")
-    keygen = backup_sub.add_parser("keygen", help="make a recipient key pair; its private half goes off the gateway",
-                                   **examples("burnedge backup keygen --out /media/usb"))  # fmt: skip
+    keygen = backup_sub.add_parser(
+        "keygen",
+        help="make a recipient key pair; its private half goes off the gateway",
+        **examples("burnedge backup keygen --out /media/usb"),
+    )
     keygen.add_argument("--out", dest="keygen_out", required=True, metavar="DIR", help="folder for the two files")
     bind(keygen, cmd_keygen)
 
-    restore = sub.add_parser("restore", help="check a backup whole, then restore it into a new folder", **examples(
-        "burnedge restore state.burnedge-backup --check --identity backup-recipient.key.json",
-        "burnedge restore state.burnedge-backup --into /var/lib/burnedge-restored --identity backup-recipient.key.json",
-        "burnedge restore state.burnedge-backup --into /var/lib/burnedge --force --passphrase-file passphrase.txt",
-        "burnedge restore state.burnedge-backup --check --passphrase-env BURNEDGE_PASSPHRASE"))  # fmt: skip
+    restore = sub.add_parser(
+        "restore",
+        help="check a backup whole, then restore it into a new folder",
+        **examples(
+            "burnedge restore state.burnedge-backup --check --identity backup-recipient.key.json",
+            "burnedge restore state.burnedge-backup --into /var/lib/burnedge-restored --identity backup-recipient.key.json",
+            "burnedge restore state.burnedge-backup --into /var/lib/burnedge --force --passphrase-file passphrase.txt",
+            "burnedge restore state.burnedge-backup --check --passphrase-env BURNEDGE_PASSPHRASE",
+        ),
+    )
     restore.add_argument("file", metavar="FILE", help="the backup file")
     restore.add_argument("--into", metavar="DIR", help="folder to restore into (new or empty)")
     restore.add_argument("--force", action="store_true", help="restore into a folder that is not empty")

@@ -11,5 +11,7 @@ import argparse
 
 def examples(*lines: str) -> dict:
     """Keyword arguments for ArgumentParser / add_parser: an epilog of example command lines, kept as written."""
-    return {"epilog": "examples:\n" + "\n".join(f"  {line}" for line in lines),
-            "formatter_class": argparse.RawDescriptionHelpFormatter}  # fmt: skip
+    return {
+        "epilog": "examples:\n" + "\n".join(f"  {line}" for line in lines),
+        "formatter_class": argparse.RawDescriptionHelpFormatter,
+    }

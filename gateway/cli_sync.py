@@ -59,8 +59,14 @@ def cmd_keys_init(args, config: Config) -> int:
 
     role = SiteRole.center if args.center else SiteRole.clinic
     keys = init_keys(_keys_dir(config, args.center), args.site_id, role, args.name, force=args.force)
-    _print({"site_id": keys.site_id, "role": role.value, "fingerprint": fingerprint(keys.identity),
-            "public_file": str(_keys_dir(config, args.center) / "site.pub.json")})  # fmt: skip
+    _print(
+        {
+            "site_id": keys.site_id,
+            "role": role.value,
+            "fingerprint": fingerprint(keys.identity),
+            "public_file": str(_keys_dir(config, args.center) / "site.pub.json"),
+        }
+    )
     return 0
 
 
@@ -135,8 +141,11 @@ def cmd_sync_now(args, config: Config) -> int:
 
     with site_database(config, False) as db:
         report = SyncService(db, config).run_round(force=True)
-    _print({"delivered": report.delivered, "rejected": report.rejected, "notes_received": report.notes_received}
-           if report else {"skipped": "a round is already running"})  # fmt: skip
+    _print(
+        {"delivered": report.delivered, "rejected": report.rejected, "notes_received": report.notes_received}
+        if report
+        else {"skipped": "a round is already running"}
+    )
     return 0
 
 
@@ -153,14 +162,17 @@ def cmd_central(args, config: Config) -> int:
     from sync.keys import PRIVATE_FILE, fingerprint, init_keys
 
     central = config.central
-    overrides = {k: v for k, v in {"host": args.host, "port": args.port,
-                                   "listen_endpoints": args.listen}.items() if v}  # fmt: skip
+    overrides = {k: v for k, v in {"host": args.host, "port": args.port, "listen_endpoints": args.listen}.items() if v}
     config = msgspec.structs.replace(config, central=msgspec.structs.replace(central, **overrides))
     keys_dir = center_paths(config.central)[1]
     if not (keys_dir / PRIVATE_FILE).exists():
         keys = init_keys(keys_dir, args.site_id, SiteRole.center, args.name)
-        log.info("made the center's keys in %s: fingerprint %s; give %s to each clinic", keys_dir,
-                 fingerprint(keys.identity), keys_dir / "site.pub.json")  # fmt: skip
+        log.info(
+            "made the center's keys in %s: fingerprint %s; give %s to each clinic",
+            keys_dir,
+            fingerprint(keys.identity),
+            keys_dir / "site.pub.json",
+        )
     serve_central(config)
     return 0
 
@@ -172,71 +184,114 @@ def add_commands(sub, load: Callable[[argparse.Namespace], Config]) -> None:
     def center_flag(parser) -> None:
         parser.add_argument("--center", action="store_true", help="act on the burn center's files ([central])")
 
-    keys = sub.add_parser("keys", help="this site's encryption and signing keys", **examples(
-        "burnedge keys init --site-id clinic-kasese --name 'Kasese clinic'", "burnedge keys show")).add_subparsers(
-        dest="keys_cmd", required=True)  # fmt: skip
-    init = keys.add_parser("init", help="make this site's keys (once; peers enrol the public half)", **examples(
-        "burnedge keys init --site-id clinic-kasese --name 'Kasese clinic'",
-        "burnedge keys init --site-id burn-center --name 'Mulago burn unit' --center"))  # fmt: skip
+    keys = sub.add_parser(
+        "keys",
+        help="this site's encryption and signing keys",
+        **examples("burnedge keys init --site-id clinic-kasese --name 'Kasese clinic'", "burnedge keys show"),
+    ).add_subparsers(dest="keys_cmd", required=True)
+    init = keys.add_parser(
+        "init",
+        help="make this site's keys (once; peers enrol the public half)",
+        **examples(
+            "burnedge keys init --site-id clinic-kasese --name 'Kasese clinic'",
+            "burnedge keys init --site-id burn-center --name 'Mulago burn unit' --center",
+        ),
+    )
     init.add_argument("--site-id", required=True, help="lower-case name on the wire, e.g. clinic-kasese")
     init.add_argument("--name", required=True, help="what people call the site")
     init.add_argument("--force", action="store_true", help="replace existing keys (every peer must enrol again)")
     center_flag(init)
     bind(init, cmd_keys_init)
-    show = keys.add_parser("show", help="this site's public keys and fingerprint",
-                           **examples("burnedge keys show", "burnedge keys show --center"))  # fmt: skip
+    show = keys.add_parser(
+        "show",
+        help="this site's public keys and fingerprint",
+        **examples("burnedge keys show", "burnedge keys show --center"),
+    )
     center_flag(show)
     bind(show, cmd_keys_show)
 
     peers = sub.add_parser(
         "peers", help="sites this one trusts", **examples("burnedge peers enrol center.pub.json", "burnedge peers list")
     ).add_subparsers(dest="peers_cmd", required=True)
-    enrol = peers.add_parser("enrol", help="trust a site's public keys file (site.pub.json); shows its fingerprint",
-                             **examples("burnedge peers enrol center.pub.json --by amani.k",
-                                        "burnedge peers enrol clinic-kasese.pub.json --center --replace"))  # fmt: skip
+    enrol = peers.add_parser(
+        "enrol",
+        help="trust a site's public keys file (site.pub.json); shows its fingerprint",
+        **examples(
+            "burnedge peers enrol center.pub.json --by amani.k",
+            "burnedge peers enrol clinic-kasese.pub.json --center --replace",
+        ),
+    )
     enrol.add_argument("file", metavar="FILE", help="the other site's site.pub.json (from its `burnedge keys init`)")
     enrol.add_argument("--by", default="cli", help="who enrols it (audited)")
     enrol.add_argument("--replace", action="store_true", help="replace the keys of a site enrolled before")
     center_flag(enrol)
     bind(enrol, cmd_peers_enrol)
-    revoke = peers.add_parser("revoke", help="stop trusting a site: what it sends from now on is rejected",
-                              **examples("burnedge peers revoke clinic-kasese --center --reason 'laptop stolen' --by "
-                                         "it.desk"))  # fmt: skip
+    revoke = peers.add_parser(
+        "revoke",
+        help="stop trusting a site: what it sends from now on is rejected",
+        **examples("burnedge peers revoke clinic-kasese --center --reason 'laptop stolen' --by it.desk"),
+    )
     revoke.add_argument("site_id", metavar="SITE_ID")
     revoke.add_argument("--reason", required=True, help="why, for the audit trail (e.g. 'laptop stolen')")
     revoke.add_argument("--by", default="cli", help="who revokes it (audited)")
     center_flag(revoke)
     bind(revoke, cmd_peers_revoke)
-    accept = peers.add_parser("accept-restore", help="at the center: a clinic was restored from a backup on purpose; "
-                              "void its audit anchors so its restored chain is anchored afresh", **examples(
-                              "burnedge peers accept-restore clinic-kasese --center --reason 'disk failed; restored "
-                              "the backup of 2026-12-01' --by it.desk"))  # fmt: skip
+    accept = peers.add_parser(
+        "accept-restore",
+        help="at the center: a clinic was restored from a backup on purpose; "
+        "void its audit anchors so its restored chain is anchored afresh",
+        **examples(
+            "burnedge peers accept-restore clinic-kasese --center --reason 'disk failed; restored "
+            "the backup of 2026-12-01' --by it.desk"
+        ),
+    )
     accept.add_argument("site_id", metavar="SITE_ID")
     accept.add_argument("--reason", required=True, help="e.g. 'disk failed; restored the backup of 2026-12-01'")
     accept.add_argument("--by", default="cli", help="who accepts it (audited)")
     center_flag(accept)
     bind(accept, cmd_peers_accept_restore)
-    listing = peers.add_parser("list", help="enrolled sites with fingerprints and revocations",
-                               **examples("burnedge peers list", "burnedge peers list --center"))  # fmt: skip
+    listing = peers.add_parser(
+        "list",
+        help="enrolled sites with fingerprints and revocations",
+        **examples("burnedge peers list", "burnedge peers list --center"),
+    )
     center_flag(listing)
     bind(listing, cmd_peers_list)
 
-    sync = sub.add_parser("sync", help="the clinic's link to the burn center", **examples(
-        "burnedge sync status", "burnedge sync now")).add_subparsers(dest="sync_cmd", required=True)  # fmt: skip
-    bind(sync.add_parser("status", help="last round, errors, backoff and the outbox",
-                         **examples("burnedge sync status")), cmd_sync_status)  # fmt: skip
-    bind(sync.add_parser("now", help="run one round now: deliver queued cases, fetch advice",
-                         **examples("burnedge sync now")), cmd_sync_now)  # fmt: skip
-    send = sync.add_parser("send", help="queue an encounter for the burn center as it stands now", **examples(
-        "burnedge sync send 0192f3b4-6a8e-7c3d-9b1a-2f4e5d6c7b8a --by 'Dr Amani K.'"))  # fmt: skip
+    sync = sub.add_parser(
+        "sync", help="the clinic's link to the burn center", **examples("burnedge sync status", "burnedge sync now")
+    ).add_subparsers(dest="sync_cmd", required=True)
+    bind(
+        sync.add_parser(
+            "status", help="last round, errors, backoff and the outbox", **examples("burnedge sync status")
+        ),
+        cmd_sync_status,
+    )
+    bind(
+        sync.add_parser(
+            "now", help="run one round now: deliver queued cases, fetch advice", **examples("burnedge sync now")
+        ),
+        cmd_sync_now,
+    )
+    send = sync.add_parser(
+        "send",
+        help="queue an encounter for the burn center as it stands now",
+        **examples("burnedge sync send 0192f3b4-6a8e-7c3d-9b1a-2f4e5d6c7b8a --by 'Dr Amani K.'"),
+    )
     send.add_argument("encounter_id", metavar="ENCOUNTER_ID")
     send.add_argument("--by", required=True, help="the clinician sending it (audited)")
     bind(send, cmd_sync_send)
 
-    central = sub.add_parser("central", help="run the burn center's server: the Zenoh endpoint clinics connect to "
-                                             "and the consultants' HTTP API (keys made on first start)",
-                             **examples("burnedge central", "burnedge central --listen tcp/0.0.0.0:7447 --host 0.0.0.0 "
-                                        "--port 8090 --site-id burn-center --name 'Mulago burn unit'"))  # fmt: skip
+    central = sub.add_parser(
+        "central",
+        help="run the burn center's server: the Zenoh endpoint clinics connect to "
+        "and the consultants' HTTP API (keys made on first start)",
+        **examples(
+            "burnedge central",
+            "burnedge central --listen tcp/0.0.0.0:7447 --host 0.0.0.0 "
+            "--port 8090 --site-id burn-center --name 'Mulago burn unit'",
+        ),
+    )
     central.add_argument("--host", help="address of the consultants' API")
     central.add_argument("--port", type=int, help="port of the consultants' API")
     central.add_argument("--listen", action="append", metavar="ENDPOINT", help="Zenoh endpoint, e.g. tcp/0.0.0.0:7447")

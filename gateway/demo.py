@@ -32,7 +32,7 @@ from schemas.record_parts import (
     MechanismType,
     PrimarySurvey,
     SecondarySurvey,
-)  # fmt: skip
+)
 from schemas.records import RecordKind
 
 DEMO_PATIENT_ID = "0192f3b4-6a8e-7c3d-9b1a-2f4e5d6c7b99"
@@ -54,8 +54,9 @@ def seed_accounts(services: Services, credentials_file: Path) -> dict[str, str]:
         return dict(line.split(" ", 1) for line in credentials_file.read_text().split("\n") if line)
     passwords = {name: secrets.token_urlsafe(12) for name in DEMO_USERS}
     for name, role in DEMO_USERS.items():
-        services.accounts.create_user(None, UserCreate(username=name, password=passwords[name], role=role,
-                                                       display_name=f"Demo {role.value}"))  # fmt: skip
+        services.accounts.create_user(
+            None, UserCreate(username=name, password=passwords[name], role=role, display_name=f"Demo {role.value}")
+        )
     credentials_file.unlink(missing_ok=True)
     fd = os.open(credentials_file, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
     with os.fdopen(fd, "w") as f:
@@ -75,30 +76,88 @@ def seed_patient(services: Services) -> None:
     injury = first - dt.timedelta(hours=3)
     enc = DEMO_ENCOUNTER_ID
     records = [
-        (RecordKind.patient, DEMO_PATIENT_ID, Patient(
-            id=DEMO_PATIENT_ID, given_name="Tomas", family_name="Demo", date_of_birth=dt.date(1984, 9, 2),
-            sex=Sex.male, weight_kg=71.0, weight_source=WeightSource.measured, height_cm=174.0)),
-        *[(RecordKind.encounter, visit, Encounter(
-            id=visit, patient_id=DEMO_PATIENT_ID, mode=EncounterMode.emergency if day == 0 else EncounterMode.consultation,
-            time_of_injury=injury, time_of_arrival=first + dt.timedelta(days=day), clinician="Dr. Demo",
-            facility="Demo field clinic")) for day, visit in zip(SERIES_DAYS, DEMO_VISIT_IDS, strict=True)],
-        (RecordKind.intake, enc, Intake(
-            encounter_id=enc, history_of_present_illness="A pan of hot cooking oil tipped over the back of the right"
-            " forearm while cooking; cooled under running water for 20 minutes at home.", no_known_allergies=True)),
-        (RecordKind.mechanism, enc, Mechanism(encounter_id=enc, type=MechanismType.scald, duration_s=5,
-                                              agent="hot cooking oil")),
-        (RecordKind.primary_survey, enc, PrimarySurvey(
-            encounter_id=enc, assessed_at=first + dt.timedelta(minutes=5), airway=Airway(patent=True),
-            breathing=Breathing(respiratory_rate_per_min=16, spo2_percent=99),
-            circulation=Circulation(heart_rate_per_min=88, systolic_bp_mmhg=128, diastolic_bp_mmhg=80),
-            disability=Disability(gcs_eye=4, gcs_verbal=5, gcs_motor=6), exposure=Exposure(temperature_c=36.8,
-            burn_cooled=True, cooling_minutes=20, jewellery_removed=True), pain_poorly_controlled=False)),
-        (RecordKind.secondary_survey, enc, SecondarySurvey(encounter_id=enc, assessed_at=first + dt.timedelta(minutes=10),
-                                                           notes="No other injury; no blistering elsewhere.")),
-        (RecordKind.burn_chart, enc, BurnChart(encounter_id=enc, assessed_at=first + dt.timedelta(minutes=15), entries=[
-            BurnChartEntry(region=R.lower_arm_right_posterior, fraction=BURN_REGION_FRACTION,
-                           depth=BurnDepth.deep_partial)])),
-    ]  # fmt: skip
+        (
+            RecordKind.patient,
+            DEMO_PATIENT_ID,
+            Patient(
+                id=DEMO_PATIENT_ID,
+                given_name="Tomas",
+                family_name="Demo",
+                date_of_birth=dt.date(1984, 9, 2),
+                sex=Sex.male,
+                weight_kg=71.0,
+                weight_source=WeightSource.measured,
+                height_cm=174.0,
+            ),
+        ),
+        *[
+            (
+                RecordKind.encounter,
+                visit,
+                Encounter(
+                    id=visit,
+                    patient_id=DEMO_PATIENT_ID,
+                    mode=EncounterMode.emergency if day == 0 else EncounterMode.consultation,
+                    time_of_injury=injury,
+                    time_of_arrival=first + dt.timedelta(days=day),
+                    clinician="Dr. Demo",
+                    facility="Demo field clinic",
+                ),
+            )
+            for day, visit in zip(SERIES_DAYS, DEMO_VISIT_IDS, strict=True)
+        ],
+        (
+            RecordKind.intake,
+            enc,
+            Intake(
+                encounter_id=enc,
+                history_of_present_illness="A pan of hot cooking oil tipped over the back of the right"
+                " forearm while cooking; cooled under running water for 20 minutes at home.",
+                no_known_allergies=True,
+            ),
+        ),
+        (
+            RecordKind.mechanism,
+            enc,
+            Mechanism(encounter_id=enc, type=MechanismType.scald, duration_s=5, agent="hot cooking oil"),
+        ),
+        (
+            RecordKind.primary_survey,
+            enc,
+            PrimarySurvey(
+                encounter_id=enc,
+                assessed_at=first + dt.timedelta(minutes=5),
+                airway=Airway(patent=True),
+                breathing=Breathing(respiratory_rate_per_min=16, spo2_percent=99),
+                circulation=Circulation(heart_rate_per_min=88, systolic_bp_mmhg=128, diastolic_bp_mmhg=80),
+                disability=Disability(gcs_eye=4, gcs_verbal=5, gcs_motor=6),
+                exposure=Exposure(temperature_c=36.8, burn_cooled=True, cooling_minutes=20, jewellery_removed=True),
+                pain_poorly_controlled=False,
+            ),
+        ),
+        (
+            RecordKind.secondary_survey,
+            enc,
+            SecondarySurvey(
+                encounter_id=enc,
+                assessed_at=first + dt.timedelta(minutes=10),
+                notes="No other injury; no blistering elsewhere.",
+            ),
+        ),
+        (
+            RecordKind.burn_chart,
+            enc,
+            BurnChart(
+                encounter_id=enc,
+                assessed_at=first + dt.timedelta(minutes=15),
+                entries=[
+                    BurnChartEntry(
+                        region=R.lower_arm_right_posterior, fraction=BURN_REGION_FRACTION, depth=BurnDepth.deep_partial
+                    )
+                ],
+            ),
+        ),
+    ]
     for kind, record_id, struct in records:
         services.records.create(who, kind, record_id, struct)
 
@@ -133,9 +192,11 @@ def seed_demo(config: Config) -> tuple[str, dict[str, str]]:
 def _fluid_line(fluids: dict) -> str:
     if not fluids["formal_resuscitation_indicated"]:
         target = fluids["urine_output_target"]
-        return (f"formal resuscitation not indicated ({fluids['tbsa_percent']:g} %TBSA, below "
-                f"{fluids['formal_resuscitation_threshold_percent']:g} %): oral or maintenance fluids; urine output "
-                f"{target['ml_per_h_low']:.0f}-{target['ml_per_h_high']:.0f} mL/h")  # fmt: skip
+        return (
+            f"formal resuscitation not indicated ({fluids['tbsa_percent']:g} %TBSA, below "
+            f"{fluids['formal_resuscitation_threshold_percent']:g} %): oral or maintenance fluids; urine output "
+            f"{target['ml_per_h_low']:.0f}-{target['ml_per_h_high']:.0f} mL/h"
+        )
     return (
         f"{fluids['formula']}, {fluids['ml_per_kg_per_percent']} mL/kg/%TBSA: 24 h {fluids['total_24h_ml']:.0f} mL;"
         f" run {fluids['rate_now_ml_per_h']:.0f} mL/h now ({fluids['fluid_given_ml']:.0f} mL already given)"

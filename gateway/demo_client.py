@@ -46,8 +46,10 @@ class GatewayClient:
         return r
 
     def login(self, username: str, password: str) -> None:
-        r = self._check(self.http.post("/api/v1/auth/login", json={"username": username, "password": password}),
-                        f"log in as {username}")  # fmt: skip
+        r = self._check(
+            self.http.post("/api/v1/auth/login", json={"username": username, "password": password}),
+            f"log in as {username}",
+        )
         self.http.headers["Authorization"] = f"Bearer {r.json()['access_token']}"
 
     def post(self, path: str, body: dict, what: str) -> dict:
@@ -60,19 +62,34 @@ class GatewayClient:
         """One photo over tus (`data` instead of the file's bytes when given); a dropped connection resumes from the
         offset the gateway has. Returns the upload."""
         data = path.read_bytes() if data is None else data
-        meta = ",".join(f"{k} {base64.b64encode(v.encode()).decode()}"
-                        for k, v in {"encounter_id": encounter_id, "filename": path.name}.items())  # fmt: skip
-        r = self._check(self.http.post("/api/v1/uploads", headers={**TUS, "Upload-Length": str(len(data)),
-                                                                   "Upload-Metadata": meta}), f"upload {path.name}")  # fmt: skip
+        meta = ",".join(
+            f"{k} {base64.b64encode(v.encode()).decode()}"
+            for k, v in {"encounter_id": encounter_id, "filename": path.name}.items()
+        )
+        r = self._check(
+            self.http.post(
+                "/api/v1/uploads", headers={**TUS, "Upload-Length": str(len(data)), "Upload-Metadata": meta}
+            ),
+            f"upload {path.name}",
+        )
         url = r.headers["location"]
         offset = 0
         for attempt in range(attempts):
             try:
                 while offset < len(data):
                     piece = data[offset : offset + CHUNK]
-                    r = self._check(self.http.patch(url, content=piece, headers={
-                        **TUS, "Upload-Offset": str(offset), "Content-Type": "application/offset+octet-stream"}),
-                        f"upload {path.name}")  # fmt: skip
+                    r = self._check(
+                        self.http.patch(
+                            url,
+                            content=piece,
+                            headers={
+                                **TUS,
+                                "Upload-Offset": str(offset),
+                                "Content-Type": "application/offset+octet-stream",
+                            },
+                        ),
+                        f"upload {path.name}",
+                    )
                     offset = int(r.headers["upload-offset"])
                 return self.get(url, f"upload {path.name}")
             except httpx.TransportError as exc:

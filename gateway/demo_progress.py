@@ -63,23 +63,42 @@ def _provisional(result: dict) -> str:
 
 def summary_table(track: dict, jobs: list[dict], results: list[dict]) -> str:
     """Per visit: area, perimeter, relief, volume, confidence, change and alignment; then the trend."""
-    rows = [("visit", "area cm2", "perim. cm", "relief mm", "volume cm3", "confidence", "provisional", "area change",
-             "align RMSE")]  # fmt: skip
+    rows = [
+        (
+            "visit",
+            "area cm2",
+            "perim. cm",
+            "relief mm",
+            "volume cm3",
+            "confidence",
+            "provisional",
+            "area change",
+            "align RMSE",
+        )
+    ]
     sessions = track.get("sessions", [])
     for i, result in enumerate(results):
         m = result.get("metrics", {})
         conf = result.get("confidence") or {}
         s = sessions[i] if i < len(sessions) else {}
-        rows.append((
-            f"day {s['day']:.0f}" if isinstance(s.get("day"), (int, float)) else f"#{i + 1}",
-            _fmt(m.get("area_cm2")), _fmt(m.get("perimeter_cm")), _fmt(m.get("relief_max_mm")),
-            _fmt(m.get("volume_cm3"), ".3f"),
-            f"{conf.get('level', '-')} {conf.get('score', 0):.2f}" if conf else result.get("status", "-"),
-            _provisional(result), _fmt(s.get("area_change_percent"), "+.1f", " %"), _fmt(s.get("registration_rmse_mm"), ".2f", " mm"),
-        ))  # fmt: skip
+        rows.append(
+            (
+                f"day {s['day']:.0f}" if isinstance(s.get("day"), (int, float)) else f"#{i + 1}",
+                _fmt(m.get("area_cm2")),
+                _fmt(m.get("perimeter_cm")),
+                _fmt(m.get("relief_max_mm")),
+                _fmt(m.get("volume_cm3"), ".3f"),
+                f"{conf.get('level', '-')} {conf.get('score', 0):.2f}" if conf else result.get("status", "-"),
+                _provisional(result),
+                _fmt(s.get("area_change_percent"), "+.1f", " %"),
+                _fmt(s.get("registration_rmse_mm"), ".2f", " mm"),
+            )
+        )
     widths = [max(len(str(r[c])) for r in rows) for c in range(len(rows[0]))]
-    lines = ["  ".join(str(v).rjust(w) if c else str(v).ljust(w) for c, (v, w) in enumerate(zip(r, widths, strict=True)))
-             for r in rows]  # fmt: skip
+    lines = [
+        "  ".join(str(v).rjust(w) if c else str(v).ljust(w) for c, (v, w) in enumerate(zip(r, widths, strict=True)))
+        for r in rows
+    ]
     lines.insert(1, "  ".join("-" * w for w in widths))
     rate = track.get("healing_rate_cm2_per_day")
     closure = track.get("projected_closure_day")

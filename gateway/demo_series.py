@@ -47,9 +47,27 @@ def render_series(options: SeriesOptions) -> Path:
     stamp = options.folder / "demo-spec.json"
     if stamp.exists() and json.loads(stamp.read_text()) == spec and (options.folder / "ground_truth.json").exists():
         return options.folder
-    command = [sys.executable, "-m", "gateway.cli", "phantom", "--series", "--out", str(options.folder),
-               "--views", str(options.views), "--width", str(options.width), "--height", str(options.height),
-               "--seed", str(options.seed), "--area-cm2", "18", "--depth-mm", "2.5"]  # fmt: skip
+    command = [
+        sys.executable,
+        "-m",
+        "gateway.cli",
+        "phantom",
+        "--series",
+        "--out",
+        str(options.folder),
+        "--views",
+        str(options.views),
+        "--width",
+        str(options.width),
+        "--height",
+        str(options.height),
+        "--seed",
+        str(options.seed),
+        "--area-cm2",
+        "18",
+        "--depth-mm",
+        "2.5",
+    ]
     done = subprocess.run(command, capture_output=True, text=True)
     if done.returncode != 0:
         raise GatewayError(f"rendering the demo phantoms failed: {done.stderr[-2000:]}")
@@ -62,9 +80,16 @@ class ServedGateway:
 
     def __init__(self, config: Config):
         self.config = config
-        self.server = uvicorn.Server(uvicorn.Config(create_app(config, start_workers=True), host=config.gateway.host,
-                                                    port=config.gateway.port, log_level="warning", access_log=False,
-                                                    timeout_graceful_shutdown=SHUTDOWN_GRACE_S))  # fmt: skip
+        self.server = uvicorn.Server(
+            uvicorn.Config(
+                create_app(config, start_workers=True),
+                host=config.gateway.host,
+                port=config.gateway.port,
+                log_level="warning",
+                access_log=False,
+                timeout_graceful_shutdown=SHUTDOWN_GRACE_S,
+            )
+        )
         self.thread = threading.Thread(target=self.server.run, name="gateway", daemon=True)
 
     @property
@@ -118,8 +143,11 @@ def analyse_series(client: GatewayClient, series: Path, options: SeriesOptions, 
             bar.line(f"day {day:>2}: uploaded {i}/{len(photos)} photos", final=i == len(photos))
         request: dict = {"assets": [a["id"] for a in assets.values()]}
         if options.clinician_masks:
-            request["masks"] = [{"asset_id": assets[m.stem]["id"], "png_base64": _b64(m)}
-                                for m in sorted((session / "masks").glob("*.png")) if m.stem in assets]  # fmt: skip
+            request["masks"] = [
+                {"asset_id": assets[m.stem]["id"], "png_base64": _b64(m)}
+                for m in sorted((session / "masks").glob("*.png"))
+                if m.stem in assets
+            ]
         jobs.append((day, client.post(f"/api/v1/encounters/{visit_id}/analyses", request, f"analyse day {day}")))
     finished = []
     for day, job in jobs:
@@ -174,19 +202,28 @@ def run_demo(config: Config, options: SeriesOptions, password: str, *, keep_serv
                 results.append({"status": job["state"], "reason": job.get("error")})
         measured = sum(r.get("status") == "ok" for r in results)
         track = healing_track(client, measured) if measured else {}
-        files = [f"  day {day:>2}: {analysis_dir(config, job['id']) / 'surface' / 'burn_surface.glb'}"
-                 f"  ({gateway.url}/api/v1/analyses/{job['id']}/artifacts)"
-                 for day, job in zip(SERIES_DAYS, jobs, strict=True)]  # fmt: skip
-        text = "\n".join([
-            "", "Healing series: patient Tomas Demo, four visits of a rendered forearm burn (model: "
-            + ("the phantom's exact masks sent as a clinician's" if options.clinician_masks else "burnedge's U-Net")
-            + ")", "", summary_table(track, jobs, results), "",
-            "Painted burn meshes (GLB; open in any glTF viewer) and every file of each analysis:", *files,
-            f"Healing track: {patient_dir(config, DEMO_PATIENT_ID) / 'track.json'}"
-            f"  ({gateway.url}/api/v1/patients/{DEMO_PATIENT_ID}/healing)",
-            f"The analyses' log (COLMAP and the workers): {config.jobs.log_file or 'the output above'}",
-            "Decision support only: a clinician confirms every figure. Surface relief is geometry, not burn depth.",
-        ])  # fmt: skip
+        files = [
+            f"  day {day:>2}: {analysis_dir(config, job['id']) / 'surface' / 'burn_surface.glb'}"
+            f"  ({gateway.url}/api/v1/analyses/{job['id']}/artifacts)"
+            for day, job in zip(SERIES_DAYS, jobs, strict=True)
+        ]
+        text = "\n".join(
+            [
+                "",
+                "Healing series: patient Tomas Demo, four visits of a rendered forearm burn (model: "
+                + ("the phantom's exact masks sent as a clinician's" if options.clinician_masks else "burnedge's U-Net")
+                + ")",
+                "",
+                summary_table(track, jobs, results),
+                "",
+                "Painted burn meshes (GLB; open in any glTF viewer) and every file of each analysis:",
+                *files,
+                f"Healing track: {patient_dir(config, DEMO_PATIENT_ID) / 'track.json'}"
+                f"  ({gateway.url}/api/v1/patients/{DEMO_PATIENT_ID}/healing)",
+                f"The analyses' log (COLMAP and the workers): {config.jobs.log_file or 'the output above'}",
+                "Decision support only: a clinician confirms every figure. Surface relief is geometry, not burn depth.",
+            ]
+        )
         print(text, flush=True)
         if keep_serving:
             print(f"\nThe gateway keeps running on {gateway.url} (API docs at /schema); Ctrl-C stops it.", flush=True)

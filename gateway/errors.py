@@ -43,9 +43,14 @@ def burnedge_error(request: Request, exc: BurnedgeError) -> Response:
     if current is not None and getattr(current, "meta", None) is not None:
         headers["ETag"] = f'"{current.meta.version}"'
     problem = Problem(
-        type=_TYPE_BASE + exc.slug, title=exc.title, status=exc.status, detail=exc.detail,
-        instance=request.url.path, errors=exc.errors, current=current,
-    )  # fmt: skip
+        type=_TYPE_BASE + exc.slug,
+        title=exc.title,
+        status=exc.status,
+        detail=exc.detail,
+        instance=request.url.path,
+        errors=exc.errors,
+        current=current,
+    )
     return _respond(problem, headers)
 
 
@@ -58,9 +63,13 @@ def validation_error(request: Request, exc: ValidationException) -> Response:
     ]
     detail = "; ".join(f"{e.field}: {e.message}" for e in errors) or exc.detail
     problem = Problem(
-        type=_TYPE_BASE + "validation", title="Request not valid", status=400,
-        detail=f"nothing was stored: {detail}", instance=request.url.path, errors=errors,
-    )  # fmt: skip
+        type=_TYPE_BASE + "validation",
+        title="Request not valid",
+        status=400,
+        detail=f"nothing was stored: {detail}",
+        instance=request.url.path,
+        errors=errors,
+    )
     return _respond(problem)
 
 
@@ -77,9 +86,12 @@ def _json_path(item: dict) -> str:
 
 def http_error(request: Request, exc: HTTPException) -> Response:
     problem = Problem(
-        type=_TYPE_BASE + f"http-{exc.status_code}", title=_title(exc.status_code), status=exc.status_code,
-        detail=str(exc.detail), instance=request.url.path,
-    )  # fmt: skip
+        type=_TYPE_BASE + f"http-{exc.status_code}",
+        title=_title(exc.status_code),
+        status=exc.status_code,
+        detail=str(exc.detail),
+        instance=request.url.path,
+    )
     return _respond(problem, exc.headers)
 
 
@@ -90,20 +102,25 @@ def too_deep(request: Request, exc: RecursionError) -> Response:
         return unexpected_error(request, exc)
     log.warning("refused a JSON body nested too deeply on %s %s", request.method, request.url.path)
     problem = Problem(
-        type=_TYPE_BASE + "validation", title="Request not valid", status=400,
+        type=_TYPE_BASE + "validation",
+        title="Request not valid",
+        status=400,
         detail="nothing was stored: the JSON body is nested too deeply (no burnedge message nests more than a few "
-        "levels)", instance=request.url.path,
-    )  # fmt: skip
+        "levels)",
+        instance=request.url.path,
+    )
     return _respond(problem)
 
 
 def unexpected_error(request: Request, exc: Exception) -> Response:
     log.exception("unhandled error on %s %s", request.method, request.url.path)
     problem = Problem(
-        type=_TYPE_BASE + "internal-error", title="Internal error", status=500,
+        type=_TYPE_BASE + "internal-error",
+        title="Internal error",
+        status=500,
         detail="the gateway hit an unexpected error; nothing partial was stored. The log has details.",
         instance=request.url.path,
-    )  # fmt: skip
+    )
     return _respond(problem)
 
 

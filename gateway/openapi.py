@@ -30,8 +30,13 @@ def _publish_patterns(schema: object) -> None:
         return
     if isinstance(schema.pattern, str):
         schema.pattern = ecma_pattern(schema.pattern)
-    for child in [schema.items, schema.additional_properties, *(schema.one_of or []), *(schema.any_of or []),
-                  *(schema.all_of or [])]:  # fmt: skip
+    for child in [
+        schema.items,
+        schema.additional_properties,
+        *(schema.one_of or []),
+        *(schema.any_of or []),
+        *(schema.all_of or []),
+    ]:
         _publish_patterns(child)
 
 

@@ -28,21 +28,62 @@ def start_scheduler(services: Services, workers: Workers | None = None) -> Backg
             log.info("uploads: completed %d left unrecorded by a restart, dropped %d expired", completed, dropped)
 
     # One job each, never two runs at once: extraction especially is heavy on the 2-core box.
-    scheduler.add_job(upload_housekeeping, "interval", seconds=config.uploads.housekeeping_every_s,
-                      id="upload-housekeeping", coalesce=True, max_instances=1, next_run_time=utcnow())  # fmt: skip
-    scheduler.add_job(services.frames.extract_pending, "interval", seconds=config.frames.poll_every_s, id=FRAMES_JOB,
-                      coalesce=True, max_instances=1, next_run_time=utcnow())  # fmt: skip
-    scheduler.add_job(services.analyses.queue.reap, "interval", seconds=config.jobs.reap_every_s, id="requeue-lost-jobs",
-                      coalesce=True, max_instances=1, next_run_time=utcnow())  # fmt: skip
+    scheduler.add_job(
+        upload_housekeeping,
+        "interval",
+        seconds=config.uploads.housekeeping_every_s,
+        id="upload-housekeeping",
+        coalesce=True,
+        max_instances=1,
+        next_run_time=utcnow(),
+    )
+    scheduler.add_job(
+        services.frames.extract_pending,
+        "interval",
+        seconds=config.frames.poll_every_s,
+        id=FRAMES_JOB,
+        coalesce=True,
+        max_instances=1,
+        next_run_time=utcnow(),
+    )
+    scheduler.add_job(
+        services.analyses.queue.reap,
+        "interval",
+        seconds=config.jobs.reap_every_s,
+        id="requeue-lost-jobs",
+        coalesce=True,
+        max_instances=1,
+        next_run_time=utcnow(),
+    )
     if workers is not None:
-        scheduler.add_job(workers.check, "interval", seconds=config.jobs.reap_every_s, id="restart-dead-workers",
-                          coalesce=True, max_instances=1)  # fmt: skip
-    scheduler.add_job(lambda: clean_up(services.db, config), "interval", seconds=config.jobs.cleanup_every_s,
-                      id="analysis-retention", coalesce=True, max_instances=1, next_run_time=utcnow())  # fmt: skip
+        scheduler.add_job(
+            workers.check,
+            "interval",
+            seconds=config.jobs.reap_every_s,
+            id="restart-dead-workers",
+            coalesce=True,
+            max_instances=1,
+        )
+    scheduler.add_job(
+        lambda: clean_up(services.db, config),
+        "interval",
+        seconds=config.jobs.cleanup_every_s,
+        id="analysis-retention",
+        coalesce=True,
+        max_instances=1,
+        next_run_time=utcnow(),
+    )
     if config.sync.enabled:
         sync = services.transfers.sync
-        scheduler.add_job(sync.scheduled_round, "interval", seconds=config.sync.interval_s, id=SYNC_JOB,
-                          coalesce=True, max_instances=1, next_run_time=utcnow())  # fmt: skip
+        scheduler.add_job(
+            sync.scheduled_round,
+            "interval",
+            seconds=config.sync.interval_s,
+            id=SYNC_JOB,
+            coalesce=True,
+            max_instances=1,
+            next_run_time=utcnow(),
+        )
         # A clinician sending a case: one round now, whatever the backoff (the round lock keeps it single).
         services.run_sync_now = lambda: scheduler.add_job(
             sync.scheduled_round, kwargs={"force": True}, id=SYNC_JOB + "-now", replace_existing=True

@@ -17,7 +17,17 @@ closes its stream by itself, and must not hold the gateway up."""
 
 def serve(config: Config) -> None:
     app = create_app(config, start_workers=True)
-    log.info("gateway on http://%s:%d (database %s); API docs at /schema",
-             config.gateway.host, config.gateway.port, config.gateway.database)  # fmt: skip
-    uvicorn.run(app, host=config.gateway.host, port=config.gateway.port, log_level="warning", access_log=False,
-                timeout_graceful_shutdown=SHUTDOWN_GRACE_S)  # fmt: skip
+    log.info(
+        "gateway on http://%s:%d (database %s); API docs at /schema",
+        config.gateway.host,
+        config.gateway.port,
+        config.gateway.database,
+    )
+    uvicorn.run(
+        app,
+        host=config.gateway.host,
+        port=config.gateway.port,
+        log_level="warning",
+        access_log=False,
+        timeout_graceful_shutdown=SHUTDOWN_GRACE_S,
+    )

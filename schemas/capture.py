@@ -28,9 +28,14 @@ class QualityReason(enum.StrEnum):
 
 
 REJECTING = frozenset(
-    {QualityReason.unreadable, QualityReason.too_small, QualityReason.blurry, QualityReason.too_dark,
-     QualityReason.too_bright}
-)  # fmt: skip
+    {
+        QualityReason.unreadable,
+        QualityReason.too_small,
+        QualityReason.blurry,
+        QualityReason.too_dark,
+        QualityReason.too_bright,
+    }
+)
 """Reasons that make a picture unusable for reconstruction; the others only advise."""
 
 

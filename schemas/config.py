@@ -380,8 +380,9 @@ class TrackingConfig(Message):
 
     def __post_init__(self) -> None:
         if not self.icp_distances_mm or min(self.icp_distances_mm) <= 0:
-            raise msgspec.ValidationError(f"icp_distances_mm must hold one or more positive distances, "
-                                          f"got {self.icp_distances_mm}")  # fmt: skip
+            raise msgspec.ValidationError(
+                f"icp_distances_mm must hold one or more positive distances, got {self.icp_distances_mm}"
+            )
 
 
 class SyncConfig(Message):
@@ -515,12 +516,22 @@ def load_config(path: str | Path | None = None, environ: dict[str, str] | None =
         except tomllib.TOMLDecodeError as exc:
             raise InvalidInput(f"config file {path} is not valid TOML: {exc}") from exc
     env = os.environ if environ is None else environ
-    sections = (("gateway", GatewayConfig), ("security", SecurityConfig), ("clinical", ClinicalConfig),
-                ("quality", QualityGateConfig), ("uploads", UploadConfig), ("frames", FramesConfig),
-                ("readiness", ReadinessConfig), ("reconstruction", ReconstructionConfig),
-                ("analysis", AnalysisConfig), ("jobs", JobsConfig),
-                ("tracking", TrackingConfig), ("sync", SyncConfig), ("central", CentralConfig),
-                ("backup", BackupConfig))  # fmt: skip
+    sections = (
+        ("gateway", GatewayConfig),
+        ("security", SecurityConfig),
+        ("clinical", ClinicalConfig),
+        ("quality", QualityGateConfig),
+        ("uploads", UploadConfig),
+        ("frames", FramesConfig),
+        ("readiness", ReadinessConfig),
+        ("reconstruction", ReconstructionConfig),
+        ("analysis", AnalysisConfig),
+        ("jobs", JobsConfig),
+        ("tracking", TrackingConfig),
+        ("sync", SyncConfig),
+        ("central", CentralConfig),
+        ("backup", BackupConfig),
+    )
     for section, struct in sections:
         defaults = struct()
         for field in struct.__struct_fields__:

@@ -28,8 +28,12 @@ def public_messages() -> list[type[msgspec.Struct]]:
             continue
         module = importlib.import_module(info.name)
         for value in vars(module).values():
-            if (isinstance(value, type) and issubclass(value, msgspec.Struct) and value not in (Message, Frozen)
-                    and value.__module__ == module.__name__):  # fmt: skip
+            if (
+                isinstance(value, type)
+                and issubclass(value, msgspec.Struct)
+                and value not in (Message, Frozen)
+                and value.__module__ == module.__name__
+            ):
                 found[value.__name__] = value
     return [found[name] for name in sorted(found)]
 
@@ -45,8 +49,9 @@ def ecma_pattern(pattern: str) -> str:
 
 def _ecma_patterns(node: object) -> object:
     if isinstance(node, dict):
-        return {k: ecma_pattern(v) if k == "pattern" and isinstance(v, str) else _ecma_patterns(v)
-                for k, v in node.items()}  # fmt: skip
+        return {
+            k: ecma_pattern(v) if k == "pattern" and isinstance(v, str) else _ecma_patterns(v) for k, v in node.items()
+        }
     if isinstance(node, list):
         return [_ecma_patterns(v) for v in node]
     return node

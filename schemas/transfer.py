@@ -16,8 +16,13 @@ from schemas.audit import AuditHead
 from schemas.base import Frozen, Id, LongText, ShortText
 
 SITE_ID_PATTERN = r"\A[a-z0-9][a-z0-9-]{1,62}\Z"
-SiteId = Annotated[str, msgspec.Meta(pattern=SITE_ID_PATTERN, description="A site's name on the wire: "
-                                     "lower-case letters, digits and dashes, e.g. 'clinic-kasese'.")]  # fmt: skip
+SiteId = Annotated[
+    str,
+    msgspec.Meta(
+        pattern=SITE_ID_PATTERN,
+        description="A site's name on the wire: lower-case letters, digits and dashes, e.g. 'clinic-kasese'.",
+    ),
+]
 Sha256 = Annotated[str, msgspec.Meta(pattern=r"\A[0-9a-f]{64}\Z")]
 PROTOCOL = 1
 """Version of the wire messages below; a receiver rejects others with the reason."""
@@ -237,8 +242,10 @@ class ConsultationNote(Frozen):
     written_at: str
     recommendation: Recommendation
     advice: LongText
-    notice: str = "Advice from a remote consultant, who has not examined the patient: decision support for the " \
-                  "treating clinician, who decides."  # fmt: skip
+    notice: str = (
+        "Advice from a remote consultant, who has not examined the patient: decision support for the "
+        "treating clinician, who decides."
+    )
 
 
 class Consultation(Frozen):

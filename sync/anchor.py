@@ -80,8 +80,12 @@ def exchange(session, link: Keys, db: Database, keys: SiteKeys, center: SiteIden
         kept = None
     previous = _entry(conn, kept.head.seq) if kept else None
     for _ in range(2):
-        ask = keys.sign("anchor-request", AnchorRequest(site_id=keys.site_id, center_id=center.site_id, head=head,
-                                                        previous=previous, sent_at=iso(utcnow())))  # fmt: skip
+        ask = keys.sign(
+            "anchor-request",
+            AnchorRequest(
+                site_id=keys.site_id, center_id=center.site_id, head=head, previous=previous, sent_at=iso(utcnow())
+            ),
+        )
         raw = request(session, link.anchor(keys.site_id), msgspec.msgpack.encode(ask), config.sync.query_timeout_s)
         reply = msgspec.msgpack.decode(raw, type=AnchorReply)
         if reply.status == "need" and reply.need_seq is not None:
@@ -92,8 +96,9 @@ def exchange(session, link: Keys, db: Database, keys: SiteKeys, center: SiteIden
             save_anchor(path, reply.anchor)
             return anchor
         break
-    raise TransferRejected(f"the center's answer to the audit anchor was not usable ({reply.status})",
-                           code="bad-anchor")  # fmt: skip
+    raise TransferRejected(
+        f"the center's answer to the audit anchor was not usable ({reply.status})", code="bad-anchor"
+    )
 
 
 def _entry(conn, seq: int) -> AuditHead:

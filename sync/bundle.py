@@ -22,9 +22,16 @@ MAGIC = b"BEB1"
 _LENGTH = struct.Struct(">Q")
 MAX_MANIFEST_BYTES = 4 * 1024 * 1024
 
-MEDIA_TYPES = {".json": "application/json", ".glb": "model/gltf-binary", ".jpg": "image/jpeg",
-               ".jpeg": "image/jpeg", ".png": "image/png", ".pdf": "application/pdf", ".heic": "image/heic",
-               ".ply": "application/octet-stream"}  # fmt: skip
+MEDIA_TYPES = {
+    ".json": "application/json",
+    ".glb": "model/gltf-binary",
+    ".jpg": "image/jpeg",
+    ".jpeg": "image/jpeg",
+    ".png": "image/png",
+    ".pdf": "application/pdf",
+    ".heic": "image/heic",
+    ".ply": "application/octet-stream",
+}
 
 
 @dataclass(frozen=True)
@@ -36,8 +43,12 @@ class PartData:
     def described(self) -> BundlePart:
         """Computed once: the outbox's change check and the manifest both need every part's sha256."""
         suffix = PurePosixPath(self.name).suffix.lower()
-        return BundlePart(name=self.name, media_type=MEDIA_TYPES.get(suffix, "application/octet-stream"),
-                          sha256=hashlib.sha256(self.data).hexdigest(), size=len(self.data))  # fmt: skip
+        return BundlePart(
+            name=self.name,
+            media_type=MEDIA_TYPES.get(suffix, "application/octet-stream"),
+            sha256=hashlib.sha256(self.data).hexdigest(),
+            size=len(self.data),
+        )
 
 
 def pack(manifest: BundleManifest, parts: list[PartData]) -> bytes:
@@ -67,13 +78,15 @@ def unpack(container: bytes) -> tuple[BundleManifest, dict[str, bytes]]:
             raise TransferRejected(f"part {part.name} is listed twice", code="bad-bundle")
         data = container[offset : offset + part.size]
         if len(data) != part.size or hashlib.sha256(data).hexdigest() != part.sha256:
-            raise TransferRejected(f"part {part.name} does not match its size and sha256 in the manifest",
-                                   code="part-mismatch")  # fmt: skip
+            raise TransferRejected(
+                f"part {part.name} does not match its size and sha256 in the manifest", code="part-mismatch"
+            )
         parts[part.name] = data
         offset += part.size
     if offset != len(container):
-        raise TransferRejected(f"the bundle has {len(container) - offset} bytes beyond its listed parts",
-                               code="bad-bundle")  # fmt: skip
+        raise TransferRejected(
+            f"the bundle has {len(container) - offset} bytes beyond its listed parts", code="bad-bundle"
+        )
     return manifest, parts
 
 

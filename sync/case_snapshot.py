@@ -18,8 +18,13 @@ from schemas.records import ENCOUNTER_PARTS, EncounterRecord, Record, RecordKind
 from schemas.transfer import BundleManifest, CaseSummary, Urgency
 from sync.bundle import PartData
 
-ANALYSIS_FILES = ("analysis.json", "metrics/metrics.json", "surface/burn_surface.glb", "segmentation/overlays/*.jpg",
-                  "report.pdf")  # fmt: skip
+ANALYSIS_FILES = (
+    "analysis.json",
+    "metrics/metrics.json",
+    "surface/burn_surface.glb",
+    "segmentation/overlays/*.jpg",
+    "report.pdf",
+)
 """Per analysis: the result, the burn painted on the mesh (GLB), the overlays that show the burn on each picture,
 and the PDF report when there is one."""
 
@@ -61,22 +66,33 @@ def summarize(snap: Snapshot) -> CaseSummary:
     scaled = [r for r in results if r["metrics"].get("area_cm2") is not None]
     latest = scaled[-1] if scaled else None
     return CaseSummary(
-        urgency=urgency, urgency_reasons=reasons, encounter_mode=snap.record.encounter.data["mode"],
+        urgency=urgency,
+        urgency_reasons=reasons,
+        encounter_mode=snap.record.encounter.data["mode"],
         age_years=assessment.age_years if assessment else None,
         tbsa_percent=assessment.tbsa.tbsa_percent if assessment and assessment.tbsa else None,
-        analyses=len(results), area_cm2=latest["metrics"]["area_cm2"] if latest else None,
+        analyses=len(results),
+        area_cm2=latest["metrics"]["area_cm2"] if latest else None,
         analysis_confidence=(latest.get("confidence") or {}).get("level") if latest else None,
-    )  # fmt: skip
+    )
 
 
-def manifest_for(snap: Snapshot, *, bundle_id: str, site_id: str, version: int, supersedes: str | None,
-                 created_by: str) -> BundleManifest:  # fmt: skip
+def manifest_for(
+    snap: Snapshot, *, bundle_id: str, site_id: str, version: int, supersedes: str | None, created_by: str
+) -> BundleManifest:
     encounter = snap.record.encounter
     return BundleManifest(
-        bundle_id=bundle_id, site_id=site_id, patient_id=encounter.data["patient_id"], encounter_id=encounter.meta.id,
-        version=version, supersedes=supersedes, created_at=iso(utcnow()), created_by=created_by,
-        summary=summarize(snap), parts=[p.described for p in snap.parts],
-    )  # fmt: skip
+        bundle_id=bundle_id,
+        site_id=site_id,
+        patient_id=encounter.data["patient_id"],
+        encounter_id=encounter.meta.id,
+        version=version,
+        supersedes=supersedes,
+        created_at=iso(utcnow()),
+        created_by=created_by,
+        summary=summarize(snap),
+        parts=[p.described for p in snap.parts],
+    )
 
 
 def _urgency(assessment: Assessment | None) -> tuple[Urgency, list[str]]:
@@ -95,8 +111,14 @@ def _urgency(assessment: Assessment | None) -> tuple[Urgency, list[str]]:
 
 def _pictures(conn: sqlite3.Connection, media: MediaStore, encounter_id: str, limit: int) -> list[PartData]:
     """The encounter's photos in the order they were taken in (up to `limit`; overlays show analysed ones too)."""
-    rows = conn.execute("SELECT id, sha256, media_type FROM assets WHERE encounter_id = ? AND kind = 'photo'"
-                        " ORDER BY created_at, id LIMIT ?", (encounter_id, limit)).fetchall()  # fmt: skip
+    rows = conn.execute(
+        "SELECT id, sha256, media_type FROM assets WHERE encounter_id = ? AND kind = 'photo'"
+        " ORDER BY created_at, id LIMIT ?",
+        (encounter_id, limit),
+    ).fetchall()
     suffixes = {"image/jpeg": ".jpg", "image/png": ".png", "image/heic": ".heic"}
-    return [PartData(f"photos/{r['id']}{suffixes.get(r['media_type'], '')}", media.blob(r["sha256"]).read_bytes())
-            for r in rows if media.blob(r["sha256"]).exists()]  # fmt: skip
+    return [
+        PartData(f"photos/{r['id']}{suffixes.get(r['media_type'], '')}", media.blob(r["sha256"]).read_bytes())
+        for r in rows
+        if media.blob(r["sha256"]).exists()
+    ]

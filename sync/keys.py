@@ -48,10 +48,13 @@ class SiteKeys:
     def identity(self) -> SiteIdentity:
         box_key = self.box.public_key.encode(HexEncoder).decode()
         return SiteIdentity(
-            site_id=self.site_id, role=self.role, name=self.name,
-            sign_key=self.signing.verify_key.encode(HexEncoder).decode(), box_key=box_key,
+            site_id=self.site_id,
+            role=self.role,
+            name=self.name,
+            sign_key=self.signing.verify_key.encode(HexEncoder).decode(),
+            box_key=box_key,
             box_key_signature=self.signing.sign(bytes.fromhex(box_key)).signature.hex(),
-        )  # fmt: skip
+        )
 
     def sign(self, kind: str, message: msgspec.Struct) -> SignedEnvelope:
         body = msgspec.msgpack.encode(message)
@@ -71,16 +74,22 @@ def init_keys(keys_dir: Path, site_id: str, role: SiteRole, name: str, *, force:
     keys_dir.mkdir(parents=True, exist_ok=True)
     private = keys_dir / PRIVATE_FILE
     if private.exists() and not force:
-        raise InvalidInput(f"{private} already exists: this site has keys (its peers trust them). "
-                           "Use --force only to replace them, then enrol the new keys at every peer.")  # fmt: skip
+        raise InvalidInput(
+            f"{private} already exists: this site has keys (its peers trust them). "
+            "Use --force only to replace them, then enrol the new keys at every peer."
+        )
     try:
         msgspec.convert(site_id, SiteId)
     except msgspec.ValidationError as exc:
         raise InvalidInput(f"site id {site_id!r} is not usable: {exc}") from exc
     keys = SiteKeys(site_id=site_id, role=role, name=name, signing=SigningKey.generate(), box=PrivateKey.generate())
-    stored = _PrivateKeys(site_id=site_id, role=role, name=name,
-                          sign_seed=keys.signing.encode(HexEncoder).decode(),
-                          box_secret=keys.box.encode(HexEncoder).decode())  # fmt: skip
+    stored = _PrivateKeys(
+        site_id=site_id,
+        role=role,
+        name=name,
+        sign_seed=keys.signing.encode(HexEncoder).decode(),
+        box_secret=keys.box.encode(HexEncoder).decode(),
+    )
     tmp = private.with_suffix(".tmp")
     fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
     with os.fdopen(fd, "wb") as handle:
@@ -100,9 +109,13 @@ def load_keys(keys_dir: Path) -> SiteKeys:
         raise MissingKeys(f"this site has no keys in {keys_dir}: run `burnedge keys init`") from exc
     except msgspec.DecodeError as exc:
         raise InvalidInput(f"{private} is damaged ({exc}): restore it from backup") from exc
-    return SiteKeys(site_id=stored.site_id, role=stored.role, name=stored.name,
-                    signing=SigningKey(stored.sign_seed, encoder=HexEncoder),
-                    box=PrivateKey(stored.box_secret, encoder=HexEncoder))  # fmt: skip
+    return SiteKeys(
+        site_id=stored.site_id,
+        role=stored.role,
+        name=stored.name,
+        signing=SigningKey(stored.sign_seed, encoder=HexEncoder),
+        box=PrivateKey(stored.box_secret, encoder=HexEncoder),
+    )
 
 
 def fingerprint(identity: SiteIdentity) -> str:
@@ -119,8 +132,9 @@ def check_identity(identity: SiteIdentity) -> None:
         if len(bytes.fromhex(identity.box_key)) != 32:
             raise ValueError("box key is not 32 bytes")
     except (ValueError, TypeError, BadSignatureError) as exc:
-        raise InvalidInput(f"the public keys of {identity.site_id} are not valid ({exc}): ask the site to send "
-                           "its site.pub.json again") from exc  # fmt: skip
+        raise InvalidInput(
+            f"the public keys of {identity.site_id} are not valid ({exc}): ask the site to send its site.pub.json again"
+        ) from exc
 
 
 def verify_envelope(envelope: SignedEnvelope, identity: SiteIdentity) -> None:

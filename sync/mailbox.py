@@ -30,8 +30,9 @@ log = logging.getLogger("burnedge.sync")
 def seal_note(center: SiteKeys, recipient: SiteIdentity, seq: int, note: ConsultationNote) -> SignedEnvelope:
     plain = msgspec.json.encode(note)
     sealed = seal(plain, bytes.fromhex(recipient.box_key), _context(recipient.site_id, seq), max(1, len(plain)))
-    message = SealedMessage(seq=seq, recipient=recipient.site_id, sealed_key=sealed.sealed_key,
-                            ciphertext=sealed.chunks[0])  # fmt: skip
+    message = SealedMessage(
+        seq=seq, recipient=recipient.site_id, sealed_key=sealed.sealed_key, ciphertext=sealed.chunks[0]
+    )
     return center.sign("note", message)
 
 
@@ -55,8 +56,9 @@ def fetch(session, link: Keys, db: Database, keys: SiteKeys, center: SiteIdentit
     cursor_key = f"mail_after:{center.site_id}"
     row = db.connection().execute("SELECT value FROM sync_state WHERE key = ?", (cursor_key,)).fetchone()
     after = int(row["value"]) if row else 0
-    ask = keys.sign("mail-request", MailRequest(site_id=keys.site_id, center_id=center.site_id, after=after,
-                                                sent_at=iso(utcnow())))  # fmt: skip
+    ask = keys.sign(
+        "mail-request", MailRequest(site_id=keys.site_id, center_id=center.site_id, after=after, sent_at=iso(utcnow()))
+    )
     raw = request(session, link.mail(keys.site_id), msgspec.msgpack.encode(ask), config.sync.query_timeout_s)
     new = 0
     for envelope in msgspec.msgpack.decode(raw, type=list[SignedEnvelope]):
@@ -72,12 +74,14 @@ def fetch(session, link: Keys, db: Database, keys: SiteKeys, center: SiteIdentit
 
 def _store(db: Database, note: ConsultationNote, center_id: str, seq: int, cursor_key: str) -> int:
     with db.write() as conn:
-        conn.execute("INSERT INTO sync_state (key, value) VALUES (?, ?) ON CONFLICT (key) DO UPDATE SET value ="
-                     " MAX(CAST(value AS INTEGER), CAST(excluded.value AS INTEGER))", (cursor_key, str(seq)))  # fmt: skip
+        conn.execute(
+            "INSERT INTO sync_state (key, value) VALUES (?, ?) ON CONFLICT (key) DO UPDATE SET value ="
+            " MAX(CAST(value AS INTEGER), CAST(excluded.value AS INTEGER))",
+            (cursor_key, str(seq)),
+        )
         if store.find_head(conn, RecordKind.consultation, note.note_id) is not None:
             return 0
-        record = Consultation(encounter_id=note.encounter_id, note=note, received_at=iso(utcnow()),
-                              signed_by=center_id)  # fmt: skip
+        record = Consultation(encounter_id=note.encounter_id, note=note, received_at=iso(utcnow()), signed_by=center_id)
         audit.insert_server_record(
             conn,
             kind=RecordKind.consultation,

@@ -52,22 +52,40 @@ class Outbox:
                 center = peers.only_center(conn, self.config.sync.center_id)
                 snap = case_snapshot.snapshot(conn, self.config, encounter_id)
                 digest = _content_digest(snap.parts)
-                last = conn.execute("SELECT * FROM outbox WHERE center_id = ? AND encounter_id = ? ORDER BY version"
-                                    " DESC LIMIT 1", (center.site_id, encounter_id)).fetchone()  # fmt: skip
+                last = conn.execute(
+                    "SELECT * FROM outbox WHERE center_id = ? AND encounter_id = ? ORDER BY version DESC LIMIT 1",
+                    (center.site_id, encounter_id),
+                ).fetchone()
             if last is not None and last["content_digest"] == digest:
                 return msgspec.structs.replace(_entry(last), unchanged=True)
             version = 1 if last is None else last["version"] + 1
             bundle_id = str(uuid.uuid4())
-            manifest = case_snapshot.manifest_for(snap, bundle_id=bundle_id, site_id=keys.site_id,
-                                                  version=version, supersedes=last["bundle_id"] if last else None,
-                                                  created_by=user)  # fmt: skip
-            sealed = seal(bundle.pack(manifest, snap.parts), bytes.fromhex(center.box_key), bundle_id,
-                          self.config.sync.chunk_kib * 1024)  # fmt: skip
+            manifest = case_snapshot.manifest_for(
+                snap,
+                bundle_id=bundle_id,
+                site_id=keys.site_id,
+                version=version,
+                supersedes=last["bundle_id"] if last else None,
+                created_by=user,
+            )
+            sealed = seal(
+                bundle.pack(manifest, snap.parts),
+                bytes.fromhex(center.box_key),
+                bundle_id,
+                self.config.sync.chunk_kib * 1024,
+            )
             announcement = TransferManifest(
-                protocol=PROTOCOL, bundle_id=bundle_id, site_id=keys.site_id, center_id=center.site_id,
-                encounter_id=encounter_id, version=version, created_at=manifest.created_at,
-                sealed_key=sealed.sealed_key, plain_size=sum(p.size for p in manifest.parts), chunks=sealed.refs,
-            )  # fmt: skip
+                protocol=PROTOCOL,
+                bundle_id=bundle_id,
+                site_id=keys.site_id,
+                center_id=center.site_id,
+                encounter_id=encounter_id,
+                version=version,
+                created_at=manifest.created_at,
+                sealed_key=sealed.sealed_key,
+                plain_size=sum(p.size for p in manifest.parts),
+                chunks=sealed.refs,
+            )
             envelope = keys.sign("manifest", announcement)
             self._write_chunks(bundle_id, sealed.chunks)
             try:
@@ -75,21 +93,43 @@ class Outbox:
                     conn.execute(
                         "INSERT INTO outbox (bundle_id, encounter_id, version, center_id, content_digest, state,"
                         " envelope, chunks, bytes, created_at, created_by) VALUES (?,?,?,?,?,?,?,?,?,?,?)",
-                        (bundle_id, encounter_id, version, center.site_id, digest, OutboxState.queued.value,
-                         msgspec.msgpack.encode(envelope), len(sealed.chunks), sum(len(c) for c in sealed.chunks),
-                         manifest.created_at, user),
-                    )  # fmt: skip
-                    audit.append(conn, action="sync.queue", user_id=None, device_id=None, kind="encounter",
-                                 record_id=encounter_id, detail=f"bundle {bundle_id} version {version} for "
-                                 f"{center.site_id} ({len(manifest.parts)} parts), by {user}")  # fmt: skip
+                        (
+                            bundle_id,
+                            encounter_id,
+                            version,
+                            center.site_id,
+                            digest,
+                            OutboxState.queued.value,
+                            msgspec.msgpack.encode(envelope),
+                            len(sealed.chunks),
+                            sum(len(c) for c in sealed.chunks),
+                            manifest.created_at,
+                            user,
+                        ),
+                    )
+                    audit.append(
+                        conn,
+                        action="sync.queue",
+                        user_id=None,
+                        device_id=None,
+                        kind="encounter",
+                        record_id=encounter_id,
+                        detail=f"bundle {bundle_id} version {version} for "
+                        f"{center.site_id} ({len(manifest.parts)} parts), by {user}",
+                    )
             except sqlite3.IntegrityError as exc:
                 shutil.rmtree(self.root / bundle_id, ignore_errors=True)
                 raise Conflict(f"version {version} of encounter {encounter_id} was queued meanwhile") from exc
             except BaseException:
                 shutil.rmtree(self.root / bundle_id, ignore_errors=True)
                 raise
-        log.info("queued bundle %s (encounter %s, version %d, %d chunks)", bundle_id, encounter_id, version,
-                 len(sealed.chunks))  # fmt: skip
+        log.info(
+            "queued bundle %s (encounter %s, version %d, %d chunks)",
+            bundle_id,
+            encounter_id,
+            version,
+            len(sealed.chunks),
+        )
         return self.get(bundle_id)
 
     def get(self, bundle_id: str) -> OutboxEntry:
@@ -121,26 +161,35 @@ class Outbox:
 
     def progress(self, bundle_id: str, sent_chunks: int) -> None:
         with self.db.write() as conn:
-            conn.execute("UPDATE outbox SET sent_chunks = MAX(sent_chunks, ?) WHERE bundle_id = ?",
-                         (sent_chunks, bundle_id))  # fmt: skip
+            conn.execute(
+                "UPDATE outbox SET sent_chunks = MAX(sent_chunks, ?) WHERE bundle_id = ?", (sent_chunks, bundle_id)
+            )
 
     def failed_attempt(self, bundle_id: str, error: str) -> None:
         with self.db.write() as conn:
-            conn.execute("UPDATE outbox SET attempts = attempts + 1, last_error = ? WHERE bundle_id = ?",
-                         (error, bundle_id))  # fmt: skip
+            conn.execute(
+                "UPDATE outbox SET attempts = attempts + 1, last_error = ? WHERE bundle_id = ?", (error, bundle_id)
+            )
 
     def delivered(self, bundle_id: str, receipt: SignedEnvelope) -> None:
         with self.db.write() as conn:
             row = conn.execute("SELECT * FROM outbox WHERE bundle_id = ?", (bundle_id,)).fetchone()
             if row["state"] == OutboxState.delivered.value:
                 return
-            conn.execute("UPDATE outbox SET state = ?, delivered_at = ?, receipt = ?, sent_chunks = chunks,"
-                         " last_error = NULL WHERE bundle_id = ?",
-                         (OutboxState.delivered.value, iso(utcnow()), msgspec.msgpack.encode(receipt),
-                          bundle_id))  # fmt: skip
-            audit.append(conn, action="sync.delivered", user_id=None, device_id=None, kind="encounter",
-                         record_id=row["encounter_id"], detail=f"bundle {bundle_id} version {row['version']} "
-                         f"stored by {row['center_id']}")  # fmt: skip
+            conn.execute(
+                "UPDATE outbox SET state = ?, delivered_at = ?, receipt = ?, sent_chunks = chunks,"
+                " last_error = NULL WHERE bundle_id = ?",
+                (OutboxState.delivered.value, iso(utcnow()), msgspec.msgpack.encode(receipt), bundle_id),
+            )
+            audit.append(
+                conn,
+                action="sync.delivered",
+                user_id=None,
+                device_id=None,
+                kind="encounter",
+                record_id=row["encounter_id"],
+                detail=f"bundle {bundle_id} version {row['version']} stored by {row['center_id']}",
+            )
         shutil.rmtree(self.root / bundle_id, ignore_errors=True)  # the center holds it now
 
     def _write_chunks(self, bundle_id: str, chunks: list[bytes]) -> None:
@@ -158,8 +207,18 @@ def _content_digest(parts: list[bundle.PartData]) -> str:
 
 
 def _entry(row: sqlite3.Row) -> OutboxEntry:
-    return OutboxEntry(bundle_id=row["bundle_id"], encounter_id=row["encounter_id"], version=row["version"],
-                       center_id=row["center_id"], state=OutboxState(row["state"]), chunks=row["chunks"],
-                       sent_chunks=row["sent_chunks"], bytes=row["bytes"], created_at=row["created_at"],
-                       created_by=row["created_by"], attempts=row["attempts"], last_error=row["last_error"],
-                       delivered_at=row["delivered_at"])  # fmt: skip
+    return OutboxEntry(
+        bundle_id=row["bundle_id"],
+        encounter_id=row["encounter_id"],
+        version=row["version"],
+        center_id=row["center_id"],
+        state=OutboxState(row["state"]),
+        chunks=row["chunks"],
+        sent_chunks=row["sent_chunks"],
+        bytes=row["bytes"],
+        created_at=row["created_at"],
+        created_by=row["created_by"],
+        attempts=row["attempts"],
+        last_error=row["last_error"],
+        delivered_at=row["delivered_at"],
+    )

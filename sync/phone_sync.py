@@ -117,6 +117,7 @@ def _require_base(m: Mutation) -> int:
 
 def _failure(m: Mutation, exc: BurnedgeError) -> MutationResult:
     if isinstance(exc, (VersionMismatch, Conflict)):
-        return MutationResult(mutation_id=m.mutation_id, status=MutationStatus.conflict, current=exc.current,
-                              error=exc.detail)  # fmt: skip
+        return MutationResult(
+            mutation_id=m.mutation_id, status=MutationStatus.conflict, current=exc.current, error=exc.detail
+        )
     return MutationResult(mutation_id=m.mutation_id, status=MutationStatus.rejected, error=exc.detail)

@@ -65,8 +65,9 @@ def open_chunks(key: bytes, context: str, chunks: Iterable[bytes], count: int) -
         try:
             yield box.decrypt(chunk, _aad(context, index, count))
         except CryptoError as exc:
-            raise TransferRejected(f"chunk {index} of {context} fails authentication (altered or misplaced)",
-                                   code="chunk-forged") from exc  # fmt: skip
+            raise TransferRejected(
+                f"chunk {index} of {context} fails authentication (altered or misplaced)", code="chunk-forged"
+            ) from exc
 
 
 def _aad(context: str, index: int, count: int) -> bytes:

@@ -65,8 +65,10 @@ class Sender:
         try:
             session_cm = zenoh.open(clinic_session_config(self.config.sync))
         except zenoh.ZError as exc:
-            raise LinkDown(f"cannot reach the burn center at {', '.join(self.config.sync.center_endpoints)}: "
-                           f"{str(exc).split(' at /')[0]}") from exc  # fmt: skip
+            raise LinkDown(
+                f"cannot reach the burn center at {', '.join(self.config.sync.center_endpoints)}: "
+                f"{str(exc).split(' at /')[0]}"
+            ) from exc
         with session_cm as session:
             for row in self.outbox.pending():
                 try:
@@ -90,8 +92,9 @@ class Sender:
         bundle_id = row["bundle_id"]
         envelope_bytes = bytes(row["envelope"])
         timeout = self.config.sync.query_timeout_s
-        reply = msgspec.msgpack.decode(request(session, link.announce(self.keys.site_id), envelope_bytes, timeout),
-                                       type=AnnounceReply)  # fmt: skip
+        reply = msgspec.msgpack.decode(
+            request(session, link.announce(self.keys.site_id), envelope_bytes, timeout), type=AnnounceReply
+        )
         if reply.status == "stored" and reply.receipt is not None:
             self._accept_receipt(center, row, reply.receipt)
             report.delivered.append(bundle_id)
@@ -147,8 +150,9 @@ class Sender:
             verify_envelope(receipt_env, center)
             receipt = msgspec.msgpack.decode(receipt_env.body, type=Receipt)
         except Exception as exc:
-            raise TransferRejected(f"the receipt for {row['bundle_id']} is not signed by {center.site_id}",
-                                   code="bad-receipt") from exc  # fmt: skip
+            raise TransferRejected(
+                f"the receipt for {row['bundle_id']} is not signed by {center.site_id}", code="bad-receipt"
+            ) from exc
         body_sha = hashlib.sha256(self.outbox.envelope(row).body).hexdigest()
         if (
             receipt_env.kind != "receipt"
@@ -157,5 +161,9 @@ class Sender:
         ):
             raise TransferRejected(f"the receipt does not match bundle {row['bundle_id']}", code="bad-receipt")
         self.outbox.delivered(row["bundle_id"], receipt_env)
-        log.info("bundle %s delivered to %s%s", row["bundle_id"], center.site_id,
-                 " (it was already stored)" if receipt.duplicate else "")  # fmt: skip
+        log.info(
+            "bundle %s delivered to %s%s",
+            row["bundle_id"],
+            center.site_id,
+            " (it was already stored)" if receipt.duplicate else "",
+        )

@@ -58,8 +58,12 @@ class SyncService:
             self._round_lock.release()
         self._succeeded(report)
         if report.delivered or report.notes_received or report.rejected:
-            log.info("sync round: %d delivered, %d notes received, %d rejected", len(report.delivered),
-                     report.notes_received, len(report.rejected))  # fmt: skip
+            log.info(
+                "sync round: %d delivered, %d notes received, %d rejected",
+                len(report.delivered),
+                report.notes_received,
+                len(report.rejected),
+            )
         return report
 
     def scheduled_round(self, force: bool = False) -> None:
@@ -85,15 +89,21 @@ class SyncService:
             kept = load_anchor(anchor_path(self.config), None)
         except BurnedgeError:
             kept = None  # audit verify names a damaged anchor; the status only reports a good one
-        return SyncStatus(enabled=self.config.sync.enabled, site_id=site_id, center_id=center_id,
-                          queued=counts.get(OutboxState.queued.value, 0),
-                          delivered=counts.get(OutboxState.delivered.value, 0),
-                          last_round_at=state.get("last_round_at"), last_success_at=state.get("last_success_at"),
-                          last_error=state.get("last_error"), next_round_at=state.get("next_round_at"),
-                          failures_in_a_row=int(state.get("failures", 0)),
-                          audit_anchored_seq=kept.head.seq if kept else None,
-                          audit_anchored_at=kept.anchored_at if kept else None,
-                          audit_anchor_problem=state.get("audit_anchor_problem"))  # fmt: skip
+        return SyncStatus(
+            enabled=self.config.sync.enabled,
+            site_id=site_id,
+            center_id=center_id,
+            queued=counts.get(OutboxState.queued.value, 0),
+            delivered=counts.get(OutboxState.delivered.value, 0),
+            last_round_at=state.get("last_round_at"),
+            last_success_at=state.get("last_success_at"),
+            last_error=state.get("last_error"),
+            next_round_at=state.get("next_round_at"),
+            failures_in_a_row=int(state.get("failures", 0)),
+            audit_anchored_seq=kept.head.seq if kept else None,
+            audit_anchored_at=kept.anchored_at if kept else None,
+            audit_anchor_problem=state.get("audit_anchor_problem"),
+        )
 
     # backoff state ----------------------------------------------------------------
     def _state(self) -> dict[str, str]:
@@ -109,8 +119,12 @@ class SyncService:
         cap = min(self.config.sync.retry_max_s, self.config.sync.retry_base_s * 2 ** (failures - 1))
         wait = random.uniform(0, cap)
         now = utcnow()
-        self._put(last_round_at=iso(now), last_error=reason, failures=str(failures),
-                  next_round_at=iso(now + dt.timedelta(seconds=wait)))  # fmt: skip
+        self._put(
+            last_round_at=iso(now),
+            last_error=reason,
+            failures=str(failures),
+            next_round_at=iso(now + dt.timedelta(seconds=wait)),
+        )
 
     def _succeeded(self, report: RoundReport) -> None:
         now = iso(utcnow())
@@ -120,6 +134,9 @@ class SyncService:
 
     def _put(self, clear: tuple[str, ...] = (), **values: str) -> None:
         with self.db.write() as conn:
-            conn.executemany("INSERT INTO sync_state (key, value) VALUES (?, ?) ON CONFLICT (key) DO UPDATE SET"
-                             " value = excluded.value", list(values.items()))  # fmt: skip
+            conn.executemany(
+                "INSERT INTO sync_state (key, value) VALUES (?, ?) ON CONFLICT (key) DO UPDATE SET"
+                " value = excluded.value",
+                list(values.items()),
+            )
             conn.executemany("DELETE FROM sync_state WHERE key = ?", [(k,) for k in clear])

@@ -35,8 +35,9 @@ def _set(conf: zenoh.Config, key: str, value) -> None:
 
 def clinic_session_config(sync: SyncConfig) -> zenoh.Config:
     if not sync.center_endpoints:
-        raise InvalidInput("[sync] center_endpoints is empty: set the burn center's Zenoh endpoint, "
-                           "e.g. tcp/203.0.113.5:7447")  # fmt: skip
+        raise InvalidInput(
+            "[sync] center_endpoints is empty: set the burn center's Zenoh endpoint, e.g. tcp/203.0.113.5:7447"
+        )
     conf = _base(sync.zenoh_config)
     _set(conf, "mode", "client")
     _set(conf, "connect/endpoints", list(sync.center_endpoints))

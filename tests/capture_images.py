@@ -22,8 +22,9 @@ def scene(
     # Skin photographed at phone resolution: pores and hair give detail at the pixel scale,
     # on top of broader mottling.
     fine = cv2.GaussianBlur(rng.normal(0, 1, (height, width)).astype(np.float32), (0, 0), 0.8)
-    coarse = cv2.resize(rng.normal(0, 1, (height // 16, width // 16)).astype(np.float32), (width, height),
-                        interpolation=cv2.INTER_CUBIC)  # fmt: skip
+    coarse = cv2.resize(
+        rng.normal(0, 1, (height // 16, width // 16)).astype(np.float32), (width, height), interpolation=cv2.INTER_CUBIC
+    )
     texture = 0.7 * fine / fine.std() + 0.5 * coarse / coarse.std()
     texture = np.clip(0.5 + 0.15 * texture, 0, 1)
     base = np.array([110, 150, 200], np.float32)  # BGR skin tone
@@ -94,9 +95,19 @@ def rgb_png(width: int, height: int) -> bytes:
     return _png(ihdr, (b"IDAT", data))
 
 
-def video(path, codec: str = "libx264", seconds: float = 2.0, size: tuple[int, int] = (960, 720), fps: int = 30,
-          *, still: bool = False, blur_except_every: int = 0, pix_fmt: str = "yuv420p", rotation: int = 0,
-          crf: int | None = None) -> bytes:  # fmt: skip
+def video(
+    path,
+    codec: str = "libx264",
+    seconds: float = 2.0,
+    size: tuple[int, int] = (960, 720),
+    fps: int = 30,
+    *,
+    still: bool = False,
+    blur_except_every: int = 0,
+    pix_fmt: str = "yuv420p",
+    rotation: int = 0,
+    crf: int | None = None,
+) -> bytes:
     """A short phone-like clip (camera panning over the textured scene, I/P frames only), via PyAV.
 
     still: the camera does not move (every frame shows pan_scene(size)[:, :width]).

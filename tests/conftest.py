@@ -75,18 +75,29 @@ def now() -> dt.datetime:
 
 
 def patient_body(patient_id: str | None = None, **extra) -> dict:
-    body = {"id": patient_id or uuid7(), "given_name": "Test", "family_name": "Patient", "date_of_birth": "1990-01-01",
-            "sex": "male", "weight_kg": 70.0, "height_cm": 175.0}  # fmt: skip
+    body = {
+        "id": patient_id or uuid7(),
+        "given_name": "Test",
+        "family_name": "Patient",
+        "date_of_birth": "1990-01-01",
+        "sex": "male",
+        "weight_kg": 70.0,
+        "height_cm": 175.0,
+    }
     body.update(extra)
     return body
 
 
 def encounter_body(patient_id: str, encounter_id: str | None = None, injury_hours_ago: float = 3, **extra) -> dict:
     t = now()
-    body = {"id": encounter_id or uuid7(), "patient_id": patient_id, "mode": "emergency",
-            "time_of_injury": (t - dt.timedelta(hours=injury_hours_ago)).isoformat(),
-            "time_of_arrival": (t - dt.timedelta(hours=min(injury_hours_ago, 0.5))).isoformat(),
-            "clinician": "Dr. Test"}  # fmt: skip
+    body = {
+        "id": encounter_id or uuid7(),
+        "patient_id": patient_id,
+        "mode": "emergency",
+        "time_of_injury": (t - dt.timedelta(hours=injury_hours_ago)).isoformat(),
+        "time_of_arrival": (t - dt.timedelta(hours=min(injury_hours_ago, 0.5))).isoformat(),
+        "clinician": "Dr. Test",
+    }
     body.update(extra)
     return body
 
@@ -97,17 +108,36 @@ def free_port() -> int:
         return s.getsockname()[1]
 
 
-FAST_HASH_ENV = {"BURNEDGE_SECURITY_ARGON2_MEMORY_KIB": "8", "BURNEDGE_SECURITY_ARGON2_TIME_COST": "1",
-                 "BURNEDGE_SECURITY_ARGON2_PARALLELISM": "1"}  # fmt: skip
+FAST_HASH_ENV = {
+    "BURNEDGE_SECURITY_ARGON2_MEMORY_KIB": "8",
+    "BURNEDGE_SECURITY_ARGON2_TIME_COST": "1",
+    "BURNEDGE_SECURITY_ARGON2_PARALLELISM": "1",
+}
 
 
 def add_user_cli(db: Path, username: str, role: str) -> None:
     """Create an account the way an administrator would: with the command line."""
     r = subprocess.run(
-        [sys.executable, "-m", "gateway.cli", "--db", str(db), "users", "add", "--username", username, "--role", role,
-         "--password-stdin"], input=PASSWORD + "\n", capture_output=True, text=True, cwd=REPO,
+        [
+            sys.executable,
+            "-m",
+            "gateway.cli",
+            "--db",
+            str(db),
+            "users",
+            "add",
+            "--username",
+            username,
+            "--role",
+            role,
+            "--password-stdin",
+        ],
+        input=PASSWORD + "\n",
+        capture_output=True,
+        text=True,
+        cwd=REPO,
         env={**FAST_HASH_ENV, "PATH": ""},
-    )  # fmt: skip
+    )
     assert r.returncode == 0, r.stderr
 
 
@@ -129,8 +159,10 @@ class GatewayProcess:
         with open(self.log, "ab") as log:
             self.proc = subprocess.Popen(
                 [sys.executable, "-m", "gateway.cli", "--db", str(self.db), "serve", "--port", str(self.port)],
-                env=env, stdout=log, stderr=subprocess.STDOUT,
-            )  # fmt: skip
+                env=env,
+                stdout=log,
+                stderr=subprocess.STDOUT,
+            )
         try:
             wait_healthy(self.proc, self.url, self.log, timeout, "gateway")
         except RuntimeError:
@@ -188,8 +220,13 @@ def open_db(path: str | Path) -> Database:
 # after the gateway's threaded tests: CI once crashed (SIGSEGV, no traceback) in an upload test that ran after
 # these libraries were loaded in the same process, and never when they were not. The gateway itself will run
 # analyses in a separate worker process for the same reason.
-NATIVE_MODULES = {"test_reconstruction.py", "test_phantom.py", "test_burn_surface.py", "test_analysis.py",
-                  "test_segmentation.py"}  # fmt: skip
+NATIVE_MODULES = {
+    "test_reconstruction.py",
+    "test_phantom.py",
+    "test_burn_surface.py",
+    "test_analysis.py",
+    "test_segmentation.py",
+}
 
 
 def pytest_collection_modifyitems(session, config, items) -> None:

@@ -173,9 +173,20 @@ class NetnsLink:
             _run("ip", "netns", "add", self._ns(side))
         # Created directly inside the namespaces: the veth names never exist in the host namespace.
         _run(
-            "ip", "link", "add", self._VETH["center"], "netns", self.center_ns,
-            "type", "veth", "peer", "name", self._VETH["clinic"], "netns", self.clinic_ns,
-        )  # fmt: skip
+            "ip",
+            "link",
+            "add",
+            self._VETH["center"],
+            "netns",
+            self.center_ns,
+            "type",
+            "veth",
+            "peer",
+            "name",
+            self._VETH["clinic"],
+            "netns",
+            self.clinic_ns,
+        )
         for side, ip in (("center", self.center_ip), ("clinic", self.clinic_ip)):
             ns, dev = self._ns(side), self._VETH[side]
             # No IPv6: its link-up chatter (DAD, router and MLD solicitations) would share the slow link.
@@ -186,8 +197,12 @@ class NetnsLink:
             self._shape(side)
         logger.info(
             "netns link %s <-> %s at %d kbit/s (%s <-> %s)",
-            self.center_ns, self.clinic_ns, self.rate_kbit, self.center_ip, self.clinic_ip,
-        )  # fmt: skip
+            self.center_ns,
+            self.clinic_ns,
+            self.rate_kbit,
+            self.center_ip,
+            self.clinic_ip,
+        )
 
     def _teardown(self) -> None:
         for proc in self._procs:
@@ -214,9 +229,22 @@ class NetnsLink:
 
     def _shape(self, side: Side) -> None:
         _run(
-            "tc", "-n", self._ns(side), "qdisc", "replace", "dev", self._VETH[side], "root", "tbf",
-            "rate", f"{self.rate_kbit}kbit", "burst", str(self.burst_bytes), "latency", f"{self.latency_ms}ms",
-        )  # fmt: skip
+            "tc",
+            "-n",
+            self._ns(side),
+            "qdisc",
+            "replace",
+            "dev",
+            self._VETH[side],
+            "root",
+            "tbf",
+            "rate",
+            f"{self.rate_kbit}kbit",
+            "burst",
+            str(self.burst_bytes),
+            "latency",
+            f"{self.latency_ms}ms",
+        )
 
     def _side_shaped(self, side: Side) -> bool:
         out = _run("tc", "-j", "-n", self._ns(side), "qdisc", "show", "dev", self._VETH[side]).stdout

@@ -31,8 +31,15 @@ CENTER = "center-test"
 
 
 def cli(*args: str, env: dict[str, str] | None = None, stdin: str | None = None) -> str:
-    r = subprocess.run([sys.executable, "-m", "gateway.cli", *args], capture_output=True, text=True, cwd=REPO,
-                       input=stdin, env={**os.environ, **FAST_HASH_ENV, **(env or {})}, timeout=120)  # fmt: skip
+    r = subprocess.run(
+        [sys.executable, "-m", "gateway.cli", *args],
+        capture_output=True,
+        text=True,
+        cwd=REPO,
+        input=stdin,
+        env={**os.environ, **FAST_HASH_ENV, **(env or {})},
+        timeout=120,
+    )
     if r.returncode != 0:
         raise RuntimeError(f"burnedge {' '.join(args)} failed: {r.stderr}")
     return r.stdout
@@ -48,8 +55,9 @@ def noise_photo(path: Path, seed: int, size: tuple[int, int] = (1600, 1200), qua
     return path
 
 
-def record_case(client: GatewayClient, folder: Path, photos: int, seed: int = 0,
-                size: tuple[int, int] = (1600, 1200)) -> tuple[str, list[Path]]:  # fmt: skip
+def record_case(
+    client: GatewayClient, folder: Path, photos: int, seed: int = 0, size: tuple[int, int] = (1600, 1200)
+) -> tuple[str, list[Path]]:
     """A patient, an encounter and `photos` noise photos uploaded over tus, through the clinic's HTTP API."""
     patient = client.post("/api/v1/patients", patient_body(), "patient")
     encounter_id = client.post("/api/v1/encounters", encounter_body(patient["meta"]["id"]), "encounter")["meta"]["id"]
@@ -62,18 +70,24 @@ def record_case(client: GatewayClient, folder: Path, photos: int, seed: int = 0,
 class CenterProcess:
     def __init__(self, folder: Path, zenoh_port: int, http_port: int):
         self.folder = folder
-        self.env = {"BURNEDGE_CENTRAL_DATABASE": str(folder / "center.sqlite3"),
-                    "BURNEDGE_CENTRAL_LISTEN_ENDPOINTS": f"tcp/127.0.0.1:{zenoh_port}",
-                    "BURNEDGE_CENTRAL_PORT": str(http_port)}  # fmt: skip
+        self.env = {
+            "BURNEDGE_CENTRAL_DATABASE": str(folder / "center.sqlite3"),
+            "BURNEDGE_CENTRAL_LISTEN_ENDPOINTS": f"tcp/127.0.0.1:{zenoh_port}",
+            "BURNEDGE_CENTRAL_PORT": str(http_port),
+        }
         self.url = f"http://127.0.0.1:{http_port}"
         self.log = folder / "center.log"
         self.proc: subprocess.Popen | None = None
 
     def start(self, timeout: float = 30.0) -> CenterProcess:
         with open(self.log, "ab") as log:
-            self.proc = subprocess.Popen([sys.executable, "-m", "gateway.cli", "central", "--site-id",
-                                          CENTER, "--name", "Test burn center"], cwd=REPO, stdout=log,
-                                         stderr=subprocess.STDOUT, env={**os.environ, **FAST_HASH_ENV, **self.env})  # fmt: skip
+            self.proc = subprocess.Popen(
+                [sys.executable, "-m", "gateway.cli", "central", "--site-id", CENTER, "--name", "Test burn center"],
+                cwd=REPO,
+                stdout=log,
+                stderr=subprocess.STDOUT,
+                env={**os.environ, **FAST_HASH_ENV, **self.env},
+            )
         wait_healthy(self.proc, self.url, self.log, timeout, "center")
         return self
 
@@ -99,13 +113,18 @@ class Sites:
         self.zenoh_port = zenoh_port or free_port()
         self.center = CenterProcess(folder, self.zenoh_port, free_port())
         self.gateway = GatewayProcess(folder / "clinic.sqlite3", free_port())
-        self.gateway.env.update({
-            "BURNEDGE_SYNC_ENABLED": "true",
-            "BURNEDGE_SYNC_CENTER_ENDPOINTS": center_endpoint or f"tcp/127.0.0.1:{self.zenoh_port}",
-            "BURNEDGE_SYNC_INTERVAL_S": "0.5", "BURNEDGE_SYNC_RETRY_BASE_S": "0.2", "BURNEDGE_SYNC_RETRY_MAX_S": "1",
-            "BURNEDGE_SYNC_CONNECT_TIMEOUT_S": "2", "BURNEDGE_SYNC_QUERY_TIMEOUT_S": "20",
-            "BURNEDGE_JOBS_WORKERS": "0",
-        })  # fmt: skip
+        self.gateway.env.update(
+            {
+                "BURNEDGE_SYNC_ENABLED": "true",
+                "BURNEDGE_SYNC_CENTER_ENDPOINTS": center_endpoint or f"tcp/127.0.0.1:{self.zenoh_port}",
+                "BURNEDGE_SYNC_INTERVAL_S": "0.5",
+                "BURNEDGE_SYNC_RETRY_BASE_S": "0.2",
+                "BURNEDGE_SYNC_RETRY_MAX_S": "1",
+                "BURNEDGE_SYNC_CONNECT_TIMEOUT_S": "2",
+                "BURNEDGE_SYNC_QUERY_TIMEOUT_S": "20",
+                "BURNEDGE_JOBS_WORKERS": "0",
+            }
+        )
 
     def set_up(self) -> None:
         db = str(self.gateway.db)
@@ -116,8 +135,20 @@ class Sites:
         cli("--db", db, "peers", "enrol", str(center_keys), "--by", "it-person")
         cli("peers", "enrol", "--center", str(keys), "--by", "it-person", env=self.center.env)
         add_user_cli(self.gateway.db, "clin", "clinician")
-        cli("users", "add", "--center", "--username", "consult", "--role", "consultant", "--name", "Dr Consultant",
-            "--password-stdin", env=self.center.env, stdin=PASSWORD + "\n")  # fmt: skip
+        cli(
+            "users",
+            "add",
+            "--center",
+            "--username",
+            "consult",
+            "--role",
+            "consultant",
+            "--name",
+            "Dr Consultant",
+            "--password-stdin",
+            env=self.center.env,
+            stdin=PASSWORD + "\n",
+        )
 
     def clinic_client(self) -> GatewayClient:
         client = GatewayClient(self.gateway.url)

@@ -24,18 +24,30 @@ SECRETS = (PASSWORD, TEMPORARY, NEW, "wrong current one")
 
 
 def cli(db: Path, *args: str, stdin: str | None = None, env: dict | None = None) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "gateway.cli", "--db", str(db), "users", *args], input=stdin,
-                          capture_output=True, text=True, cwd=REPO, env={**FAST_HASH_ENV, "PATH": "", **(env or {})},
-                          timeout=60)  # fmt: skip
+    return subprocess.run(
+        [sys.executable, "-m", "gateway.cli", "--db", str(db), "users", *args],
+        input=stdin,
+        capture_output=True,
+        text=True,
+        cwd=REPO,
+        env={**FAST_HASH_ENV, "PATH": "", **(env or {})},
+        timeout=60,
+    )
 
 
 def typed(db: Path, *args: str, answers: tuple[str, str]) -> tuple[int, str]:
     """A CLI call on a terminal (a pty), answering its two password prompts; its exit code and all it wrote."""
     master, slave = os.openpty()
     # A new session has no controlling terminal, so getpass reads the pty given as stdin (with echo off).
-    proc = subprocess.Popen([sys.executable, "-m", "gateway.cli", "--db", str(db), "users", *args], stdin=slave,
-                            stdout=slave, stderr=slave, cwd=REPO, env={**FAST_HASH_ENV, "PATH": ""},
-                            start_new_session=True)  # fmt: skip
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "gateway.cli", "--db", str(db), "users", *args],
+        stdin=slave,
+        stdout=slave,
+        stderr=slave,
+        cwd=REPO,
+        env={**FAST_HASH_ENV, "PATH": ""},
+        start_new_session=True,
+    )
     os.close(slave)
     seen = b""
 
@@ -104,8 +116,11 @@ def test_users_list_shows_every_account_and_its_state(gw, http):
     assert r.returncode == 0, r.stderr
     users = {u["username"]: u for u in json.loads(r.stdout)}
     assert {"admin", "care.list"} <= set(users)
-    assert (users["care.list"]["role"], users["care.list"]["active"], users["care.list"]["must_change_password"]) == \
-        ("nurse", True, False)  # fmt: skip
+    assert (users["care.list"]["role"], users["care.list"]["active"], users["care.list"]["must_change_password"]) == (
+        "nurse",
+        True,
+        False,
+    )
     assert "password" not in r.stdout.replace("must_change_password", "")
 
 
@@ -156,13 +171,14 @@ def test_a_reset_password_must_be_changed_before_anything_else(gw, http):
         blocked = http.request(method, path, headers=session, json={})
         assert blocked.status_code == 403, (method, path, blocked.text)
         assert blocked.headers["content-type"].startswith("application/problem+json")
-        assert "you must change your password before you go on: POST /api/v1/auth/password" in \
-            blocked.json()["detail"]  # fmt: skip
-    same = http.post("/api/v1/auth/password", json={"current_password": TEMPORARY, "new_password": TEMPORARY},
-                     headers=session)  # fmt: skip
+        assert "you must change your password before you go on: POST /api/v1/auth/password" in blocked.json()["detail"]
+    same = http.post(
+        "/api/v1/auth/password", json={"current_password": TEMPORARY, "new_password": TEMPORARY}, headers=session
+    )
     assert same.status_code == 422
-    changed = http.post("/api/v1/auth/password", json={"current_password": TEMPORARY, "new_password": NEW},
-                        headers=session)  # fmt: skip
+    changed = http.post(
+        "/api/v1/auth/password", json={"current_password": TEMPORARY, "new_password": NEW}, headers=session
+    )
     assert changed.status_code == 200 and changed.json()["must_change_password"] is False, changed.text
     assert http.get("/api/v1/patients", headers=session).status_code == 200, "the session that changed it goes on"
     assert http.get("/api/v1/auth/me", headers=session).json()["must_change_password"] is False
@@ -176,12 +192,14 @@ def test_changing_your_own_password_needs_the_current_one_and_ends_your_other_se
     add_user_cli(gw.db, "care.own", "nurse")
     here, elsewhere = bearer(log_in(http, "care.own")), bearer(log_in(http, "care.own"))
     user_id = http.get("/api/v1/auth/me", headers=here).json()["user_id"]
-    wrong = http.post("/api/v1/auth/password", json={"current_password": "wrong current one", "new_password": NEW},
-                      headers=here)  # fmt: skip
+    wrong = http.post(
+        "/api/v1/auth/password", json={"current_password": "wrong current one", "new_password": NEW}, headers=here
+    )
     assert wrong.status_code == 403 and "current password is wrong" in wrong.json()["detail"]
     assert http.get("/api/v1/auth/me", headers=elsewhere).status_code == 200, "a refused change changes nothing"
-    short = http.post("/api/v1/auth/password", json={"current_password": PASSWORD, "new_password": "short"},
-                      headers=here)  # fmt: skip
+    short = http.post(
+        "/api/v1/auth/password", json={"current_password": PASSWORD, "new_password": "short"}, headers=here
+    )
     assert short.status_code == 400
     r = http.post("/api/v1/auth/password", json={"current_password": PASSWORD, "new_password": NEW}, headers=here)
     assert r.status_code == 200, r.text
@@ -216,19 +234,45 @@ def test_users_passwd_sets_a_password_and_with_temporary_forces_a_change(gw, htt
     assert http.get("/api/v1/patients", headers=bearer(signed_in)).status_code == 403
     details = [e["detail"] for e in audited(http, user_id) if e["action"] == "user.password_reset"]
     assert details == ["care.cli; 1 sessions ended", "care.cli; must change it at next sign-in; 2 sessions ended"]
-    verified = subprocess.run([sys.executable, "-m", "gateway.cli", "--db", str(gw.db), "audit", "verify"],
-                              capture_output=True, text=True, cwd=REPO, env={**FAST_HASH_ENV, "PATH": ""})  # fmt: skip
+    verified = subprocess.run(
+        [sys.executable, "-m", "gateway.cli", "--db", str(gw.db), "audit", "verify"],
+        capture_output=True,
+        text=True,
+        cwd=REPO,
+        env={**FAST_HASH_ENV, "PATH": ""},
+    )
     assert verified.returncode == 0, verified.stdout
 
 
 def test_users_commands_act_on_the_burn_centers_accounts_with_center(tmp_path):
     gateway_db, center = tmp_path / "gateway.sqlite3", {"BURNEDGE_CENTRAL_DATABASE": str(tmp_path / "center.sqlite3")}
     for name, role in (("center.admin", "admin"), ("dr.burns", "consultant")):
-        made = cli(gateway_db, "add", "--username", name, "--role", role, "--password-stdin", "--center",
-                   stdin=PASSWORD + "\n", env=center)  # fmt: skip
+        made = cli(
+            gateway_db,
+            "add",
+            "--username",
+            name,
+            "--role",
+            role,
+            "--password-stdin",
+            "--center",
+            stdin=PASSWORD + "\n",
+            env=center,
+        )
         assert made.returncode == 0, made.stderr
-    assert cli(gateway_db, "passwd", "dr.burns", "--temporary", "--password-stdin", "--center", stdin=NEW + "\n",
-               env=center).returncode == 0  # fmt: skip
+    assert (
+        cli(
+            gateway_db,
+            "passwd",
+            "dr.burns",
+            "--temporary",
+            "--password-stdin",
+            "--center",
+            stdin=NEW + "\n",
+            env=center,
+        ).returncode
+        == 0
+    )
     assert cli(gateway_db, "disable", "dr.burns", "--center", env=center).returncode == 0
     assert cli(gateway_db, "disable", "center.admin", "--center", env=center).returncode == 4
     listed = {u["username"]: u for u in json.loads(cli(gateway_db, "list", "--center", env=center).stdout)}

@@ -89,19 +89,33 @@ def test_a_queued_analysis_is_cancelled_at_once_and_may_be_asked_for_again(visit
     [
         (lambda a: {"assets": list(a.values())[:3]}, "needs at least 5"),
         (lambda a: {"assets": ["0192f3b4-6a8e-7c3d-9b1a-000000000000", *a.values()]}, "not pictures of this encounter"),
-        (lambda a: {"masks": [{"asset_id": a["view_001"], "png_base64": _png(np.zeros((10, 10), np.uint8))}]},
-         "is 10x10 but the picture is 800x600"),
+        (
+            lambda a: {"masks": [{"asset_id": a["view_001"], "png_base64": _png(np.zeros((10, 10), np.uint8))}]},
+            "is 10x10 but the picture is 800x600",
+        ),
         (lambda a: {"masks": [{"asset_id": a["view_001"], "png_base64": "bm90IGEgcG5n"}]}, "not a PNG"),
         (lambda a: {"masks": [{"asset_id": a["view_001"]}]}, "either png_base64 or polygons"),
-        (lambda a: {"assets": list(a.values())[1:],
-                    "masks": [{"asset_id": a["view_000"], "polygons": [[[0, 0], [5, 0], [5, 5]]]}]},
-         "not one of the analysed pictures"),
-        (lambda a: {"ruler": {"distance_mm": 50, "marks": [
-            {"asset_id": a["view_000"], "a": [1, 2], "b": [3, 4]},
-            {"asset_id": "0192f3b4-6a8e-7c3d-9b1a-000000000000", "a": [1, 2], "b": [3, 4]}]}},
-         "ruler mark on"),
+        (
+            lambda a: {
+                "assets": list(a.values())[1:],
+                "masks": [{"asset_id": a["view_000"], "polygons": [[[0, 0], [5, 0], [5, 5]]]}],
+            },
+            "not one of the analysed pictures",
+        ),
+        (
+            lambda a: {
+                "ruler": {
+                    "distance_mm": 50,
+                    "marks": [
+                        {"asset_id": a["view_000"], "a": [1, 2], "b": [3, 4]},
+                        {"asset_id": "0192f3b4-6a8e-7c3d-9b1a-000000000000", "a": [1, 2], "b": [3, 4]},
+                    ],
+                }
+            },
+            "ruler mark on",
+        ),
     ],
-)  # fmt: skip
+)
 def test_requests_that_cannot_give_an_analysis_are_refused_with_the_reason(visit, make_body, message):
     phone, enc, assets = visit
     r = phone.http.post(f"/api/v1/encounters/{enc}/analyses", json=make_body(assets))

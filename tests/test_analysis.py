@@ -28,8 +28,9 @@ from tests.phantom_helpers import SMALL, hide_marker, render_small_patch
 
 
 def cli(*args: str) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "gateway.cli", *args], capture_output=True, text=True, cwd=REPO,
-                          timeout=600)  # fmt: skip
+    return subprocess.run(
+        [sys.executable, "-m", "gateway.cli", *args], capture_output=True, text=True, cwd=REPO, timeout=600
+    )
 
 
 @pytest.fixture(scope="module")
@@ -41,8 +42,20 @@ def phantom(tmp_path_factory) -> Path:
 def analysed(phantom, tmp_path_factory) -> tuple[Path, dict]:
     """`burnedge analyze` with the true masks given as a person's masks."""
     out = tmp_path_factory.mktemp("analysis")
-    r = cli("analyze", str(phantom / "images"), "--masks", str(phantom / "masks"), "--out", str(out),
-            "--hours-since-injury", "30", "--height-cm", "170", "--weight-kg", "65")  # fmt: skip
+    r = cli(
+        "analyze",
+        str(phantom / "images"),
+        "--masks",
+        str(phantom / "masks"),
+        "--out",
+        str(out),
+        "--hours-since-injury",
+        "30",
+        "--height-cm",
+        "170",
+        "--weight-kg",
+        "65",
+    )
     assert r.returncode == 0, r.stderr[-3000:]
     return out, json.loads(r.stdout)
 
@@ -139,8 +152,15 @@ def test_without_a_scale_nothing_is_reported_in_mm_or_cm(phantom, analysed, tmp_
     assert result.status is AnalysisStatus.unscaled and "not reported in mm or cm" in result.reason
     assert result.scale.method == "none" and result.scale.mm_per_unit is None
     m = result.metrics
-    for field in ("area_cm2", "perimeter_cm", "relief_max_mm", "relief_mean_mm", "raised_max_mm", "volume_cm3",
-                  "tbsa_percent"):  # fmt: skip
+    for field in (
+        "area_cm2",
+        "perimeter_cm",
+        "relief_max_mm",
+        "relief_mean_mm",
+        "raised_max_mm",
+        "volume_cm3",
+        "tbsa_percent",
+    ):
         assert getattr(m, field) is None, field
     assert m.area_model_units2 > 0 and result.reference.ring_rms_mm is None
     assert result.confidence.level == "low" and any("no scale" in r for r in result.confidence.reasons)
@@ -152,8 +172,12 @@ def test_stage_failures_still_write_a_result_and_bad_requests_touch_nothing(phan
     work = tmp_path / "analysis"
     shutil.copytree(out, work)
     before = (work / "analysis.json").read_bytes()
-    for bad in ({"masks": work / "segmentation" / "masks"}, {"patient": Patient(hours_since_injury=-2)},
-                {"patient": Patient(height_cm=170)}, {"patient": Patient(height_cm=170, weight_kg=900)}):  # fmt: skip
+    for bad in (
+        {"masks": work / "segmentation" / "masks"},
+        {"patient": Patient(hours_since_injury=-2)},
+        {"patient": Patient(height_cm=170)},
+        {"patient": Patient(height_cm=170, weight_kg=900)},
+    ):
         with pytest.raises(InvalidInput):
             analyze(Config(), phantom / "images", work, **bad)
         assert (work / "analysis.json").read_bytes() == before  # refused before anything was removed
@@ -185,10 +209,12 @@ def test_a_person_outline_replaces_the_model_for_that_view(phantom, tmp_path):
 
 @pytest.mark.parametrize(
     ("name", "content", "why"),
-    [("view_000.png", "small-png", "draw the mask on the picture as stored"),
-     ("view_000.json", '{"polygons": [[[1, 2], [3, 4]]]}', "at least 3 points"),
-     ("view_000.json", '{"outline": []}', "expected")],
-)  # fmt: skip
+    [
+        ("view_000.png", "small-png", "draw the mask on the picture as stored"),
+        ("view_000.json", '{"polygons": [[[1, 2], [3, 4]]]}', "at least 3 points"),
+        ("view_000.json", '{"outline": []}', "expected"),
+    ],
+)
 def test_bad_person_masks_are_refused_with_a_reason(phantom, tmp_path, name, content, why):
     masks = tmp_path / "given"
     masks.mkdir()
@@ -239,16 +265,26 @@ def test_the_shipped_model_runs_on_a_crop_and_on_the_whole_picture(phantom):
 def test_confidence_falls_with_each_weak_indicator():
     good = confidence.score(12, 10, 0.8, 0.5, 1.0, 0.3, 0)
     assert good.level == "high" and good.reasons == []
-    for weak, words in [({"seen3": 0.4}, "3 or more angles"), ({"scale_uncertainty_percent": 3.0}, "scale"),
-                        ({"views_seeing_burn": 3}, "only 3 photos"), ({"reprojection_px": 2.5}, "loosely")]:  # fmt: skip
-        args = {"views_used": 12, "views_seeing_burn": 10, "inlier_ratio": 0.8, "reprojection_px": 0.5,
-                "seen3": 1.0, "scale_uncertainty_percent": 0.3, "clinician_masks": 0} | weak  # fmt: skip
+    for weak, words in [
+        ({"seen3": 0.4}, "3 or more angles"),
+        ({"scale_uncertainty_percent": 3.0}, "scale"),
+        ({"views_seeing_burn": 3}, "only 3 photos"),
+        ({"reprojection_px": 2.5}, "loosely"),
+    ]:
+        args = {
+            "views_used": 12,
+            "views_seeing_burn": 10,
+            "inlier_ratio": 0.8,
+            "reprojection_px": 0.5,
+            "seen3": 1.0,
+            "scale_uncertainty_percent": 0.3,
+            "clinician_masks": 0,
+        } | weak
         worse = confidence.score(**args)
         assert worse.score < good.score and any(words in r for r in worse.reasons), (weak, worse)
 
 
 def test_provisional_only_before_72_hours(phantom, analysed):
     out, _ = analysed
-    later = analyze(Config(), phantom / "images", out, masks=phantom / "masks",
-                    patient=Patient(hours_since_injury=96))  # fmt: skip
+    later = analyze(Config(), phantom / "images", out, masks=phantom / "masks", patient=Patient(hours_since_injury=96))
     assert later.provisional is False and later.hours_since_injury == 96

@@ -17,8 +17,14 @@ from processing.capture.stamp import with_capture_time
 from tests.conftest import GatewayProcess, add_user_cli, encounter_body, free_port, login, patient_body
 from tests.phantom_helpers import SMALL, render_small_patch
 
-FAST_QUEUE = {"BURNEDGE_JOBS_LEASE_S": "3", "BURNEDGE_JOBS_NICE": "0", "BURNEDGE_JOBS_HEARTBEAT_S": "0.5", "BURNEDGE_JOBS_POLL_S": "0.3",
-              "BURNEDGE_JOBS_REAP_EVERY_S": "1", "BURNEDGE_JOBS_RETRY_BASE_S": "0"}  # fmt: skip
+FAST_QUEUE = {
+    "BURNEDGE_JOBS_LEASE_S": "3",
+    "BURNEDGE_JOBS_NICE": "0",
+    "BURNEDGE_JOBS_HEARTBEAT_S": "0.5",
+    "BURNEDGE_JOBS_POLL_S": "0.3",
+    "BURNEDGE_JOBS_REAP_EVERY_S": "1",
+    "BURNEDGE_JOBS_RETRY_BASE_S": "0",
+}
 
 
 def children(pid: int) -> list[int]:
@@ -82,8 +88,14 @@ def phone(gateway) -> GatewayClient:
     client.close()
 
 
-def new_visit(phone: GatewayClient, phantom: Path, *, mode: str = "emergency", injury_hours_ago: float = 3,
-              taken_hours_after_injury: float | None = None) -> tuple[str, dict[str, str]]:  # fmt: skip
+def new_visit(
+    phone: GatewayClient,
+    phantom: Path,
+    *,
+    mode: str = "emergency",
+    injury_hours_ago: float = 3,
+    taken_hours_after_injury: float | None = None,
+) -> tuple[str, dict[str, str]]:
     """A patient and a visit with the phantom's photos uploaded (stamped by their camera when `taken_...`)."""
     p = patient_body()
     phone.post("/api/v1/patients", p, "patient")
@@ -100,8 +112,12 @@ def new_visit(phone: GatewayClient, phantom: Path, *, mode: str = "emergency", i
 
 
 def true_masks(phantom: Path, assets: dict[str, str]) -> dict:
-    return {"masks": [{"asset_id": assets[m.stem], "png_base64": base64.b64encode(m.read_bytes()).decode()}
-                      for m in sorted((phantom / "masks").glob("*.png"))]}  # fmt: skip
+    return {
+        "masks": [
+            {"asset_id": assets[m.stem], "png_base64": base64.b64encode(m.read_bytes()).decode()}
+            for m in sorted((phantom / "masks").glob("*.png"))
+        ]
+    }
 
 
 def job(phone: GatewayClient, job_id: str) -> dict:
@@ -188,11 +204,16 @@ def test_a_worker_killed_mid_reconstruction_resumes_and_gives_the_same_metrics(u
     assert last["state"] == "done", last
     finished = job(phone, requested["id"])
     assert finished["attempts"] == 2
-    assert finished["history"] == ["try 1 lost its worker (killed, power cut or out of memory) in the dense stage; "
-                                   "retried from dense"]  # fmt: skip
+    assert finished["history"] == [
+        "try 1 lost its worker (killed, power cut or out of memory) in the dense stage; retried from dense"
+    ]
     first, second = phone.get(f"/api/v1/analyses/{requested['id']}/attempts", "attempts")
-    assert (first["outcome"], first["stage"], second["outcome"], second["resumed_from"]) == ("lost", "dense", "done",
-                                                                                          "dense")  # fmt: skip
+    assert (first["outcome"], first["stage"], second["outcome"], second["resumed_from"]) == (
+        "lost",
+        "dense",
+        "done",
+        "dense",
+    )
     result = phone.get(f"/api/v1/analyses/{requested['id']}/result", "result")
     # Resumed: SfM was not run again; its time is the one it took in the first try.
     assert "sfm" in result["reused_stages"] and result["timings_s"]["sfm"] > 0
@@ -248,8 +269,12 @@ def test_sigkill_of_the_whole_gateway_with_three_queued_jobs(tmp_path, phantom):
         enc, assets = new_visit(phone, phantom)
         stems = sorted(assets)
         # Three different picture sets of one visit: three analyses.
-        ids = [phone.post(f"/api/v1/encounters/{enc}/analyses", {"assets": [assets[s] for s in stems if s != skip]},
-                          "request")["id"] for skip in stems[:3]]  # fmt: skip
+        ids = [
+            phone.post(
+                f"/api/v1/encounters/{enc}/analyses", {"assets": [assets[s] for s in stems if s != skip]}, "request"
+            )["id"]
+            for skip in stems[:3]
+        ]
         at_stage(phone, ids[0], "sfm")
         [worker] = children(gw.proc.pid)
         [analysis] = children(worker)

@@ -24,8 +24,9 @@ def amended(client, auth):
     """A patient at version 2 (weight corrected)."""
     p = patient_body()
     client.post("/api/v1/patients", json=p, headers=auth["clinician"])
-    r = client.put(f"/api/v1/patients/{p['id']}", json={**p, "weight_kg": 72},
-                   headers={**auth["clinician"], "If-Match": '"1"'})  # fmt: skip
+    r = client.put(
+        f"/api/v1/patients/{p['id']}", json={**p, "weight_kg": 72}, headers={**auth["clinician"], "If-Match": '"1"'}
+    )
     assert r.status_code == 200
     return p["id"]
 
@@ -46,10 +47,16 @@ def test_a_record_written_outside_the_gateway_or_a_removed_head_is_named(service
     conn.execute("DELETE FROM record_heads WHERE id = ?", (amended,))
     result = audit.verify(conn)
     assert not result.ok and "no longer served" in result.reason
-    conn.execute("INSERT INTO record_heads (kind, id, seq, parent_id, deleted) SELECT kind, ?, seq, parent_id, 0"
-                 " FROM record_versions WHERE id = ? AND version = 2", ("0" * 8 + "-0000-7000-8000-" + "0" * 12, amended))  # fmt: skip
-    conn.execute("INSERT INTO record_heads (kind, id, seq, parent_id, deleted) SELECT kind, id, seq, parent_id, 0"
-                 " FROM record_versions WHERE id = ? AND version = 2", (amended,))  # fmt: skip
+    conn.execute(
+        "INSERT INTO record_heads (kind, id, seq, parent_id, deleted) SELECT kind, ?, seq, parent_id, 0"
+        " FROM record_versions WHERE id = ? AND version = 2",
+        ("0" * 8 + "-0000-7000-8000-" + "0" * 12, amended),
+    )
+    conn.execute(
+        "INSERT INTO record_heads (kind, id, seq, parent_id, deleted) SELECT kind, id, seq, parent_id, 0"
+        " FROM record_versions WHERE id = ? AND version = 2",
+        (amended,),
+    )
     result = audit.verify(conn)
     assert not result.ok and "no audit entry records it" in result.reason
 
@@ -58,8 +65,9 @@ def _anchor_at(config, seq: int, digest: str) -> Path:
     """The anchor a burn center would have signed, in the clinic's keys folder (no center enrolled here, so its
     content is checked, not its signature)."""
     center = init_keys(Path(config.gateway.database).parent / "center-keys", "center-test", SiteRole.center, "C")
-    anchor = AuditAnchor(site_id="clinic-test", center_id="center-test", head=AuditHead(seq=seq, hash=digest),
-                         anchored_at=iso(utcnow()))  # fmt: skip
+    anchor = AuditAnchor(
+        site_id="clinic-test", center_id="center-test", head=AuditHead(seq=seq, hash=digest), anchored_at=iso(utcnow())
+    )
     path = Path(config.gateway.database).parent / "burnedge-keys" / ANCHOR_FILE
     save_anchor(path, center.sign("audit-anchor", anchor))
     return path

@@ -53,8 +53,11 @@ def test_roles_limit_what_each_user_may_do(client, auth):
     assert client.post("/api/v1/patients", json=p, headers=nurse).status_code == 201
     e = encounter_body(p["id"])
     assert client.post("/api/v1/encounters", json=e, headers=nurse).status_code == 201
-    chart = {"encounter_id": e["id"], "assessed_at": now().isoformat(),
-             "entries": [{"region": "trunk_anterior", "fraction": 0.5, "depth": "deep_partial"}]}  # fmt: skip
+    chart = {
+        "encounter_id": e["id"],
+        "assessed_at": now().isoformat(),
+        "entries": [{"region": "trunk_anterior", "fraction": 0.5, "depth": "deep_partial"}],
+    }
     url = f"/api/v1/encounters/{e['id']}/burn-chart"
     assert client.put(url, json=chart, headers={**nurse, "If-None-Match": "*"}).status_code == 403
     assert client.put(url, json=chart, headers={**consultant, "If-None-Match": "*"}).status_code == 403
@@ -64,8 +67,12 @@ def test_roles_limit_what_each_user_may_do(client, auth):
     assert client.get("/api/v1/patients", headers=admin).status_code == 403
     withdraw = {"params": {"reason": "test"}, "headers": {**nurse, "If-Match": '"1"'}}
     assert client.delete(f"/api/v1/patients/{p['id']}", **withdraw).status_code == 403
-    assert client.post("/api/v1/admin/users", json={"username": "x1", "password": PASSWORD, "role": "admin"},
-                       headers=clin).status_code == 403  # fmt: skip
+    assert (
+        client.post(
+            "/api/v1/admin/users", json={"username": "x1", "password": PASSWORD, "role": "admin"}, headers=clin
+        ).status_code
+        == 403
+    )
     assert client.get("/api/v1/admin/audit", headers=clin).status_code == 403
     assert client.get("/api/v1/admin/audit", headers=admin).status_code == 200
     # the admin sees no clinical record in the change feed either
@@ -119,8 +126,11 @@ def test_a_revoked_device_token_stops_working_at_once(client, auth):
     assert revoked.status_code == 200 and revoked.json()["revoked_at"] is not None
     refused = client.get("/api/v1/patients", headers=phone)
     assert refused.status_code == 401 and "revoked" in refused.json()["detail"]
-    relogin = client.post("/api/v1/auth/login", json={"username": "clinician", "password": PASSWORD},
-                          headers={"X-Device-Token": device["device_token"]})  # fmt: skip
+    relogin = client.post(
+        "/api/v1/auth/login",
+        json={"username": "clinician", "password": PASSWORD},
+        headers={"X-Device-Token": device["device_token"]},
+    )
     assert relogin.status_code == 401 and "revoked" in relogin.json()["detail"]
     # other sessions are untouched
     assert client.get("/api/v1/patients", headers=auth["clinician"]).status_code == 200
@@ -257,12 +267,14 @@ def _valid_body(path: str, record_id: str) -> dict | None:
     t = now().isoformat()
     part = path.rsplit("/", 1)[-1]
     bodies = {
-        "intake": {"encounter_id": record_id}, "resuscitation": {"encounter_id": record_id},
+        "intake": {"encounter_id": record_id},
+        "resuscitation": {"encounter_id": record_id},
         "primary-survey": {"encounter_id": record_id, "assessed_at": t},
         "secondary-survey": {"encounter_id": record_id, "assessed_at": t},
         "burn-chart": {"encounter_id": record_id, "assessed_at": t},
-        "mechanism": {"encounter_id": record_id, "type": "scald"}, "analyses": {},
-    }  # fmt: skip
+        "mechanism": {"encounter_id": record_id, "type": "scald"},
+        "analyses": {},
+    }
     if part in bodies:
         return bodies[part]
     if path.startswith("/api/v1/patients"):
@@ -286,8 +298,17 @@ def test_an_administrator_is_refused_every_clinical_route(app, client, auth):
             assert r.status_code == 403, f"{method} {route.path}: {r.status_code} {r.text[:200]}"
             checked += 1
     assert checked >= 25
-    push = {"mutations": [{"mutation_id": uuid7(), "kind": "patient", "id": (pid := uuid7()), "op": "create",
-                           "data": patient_body(pid)}]}  # fmt: skip
+    push = {
+        "mutations": [
+            {
+                "mutation_id": uuid7(),
+                "kind": "patient",
+                "id": (pid := uuid7()),
+                "op": "create",
+                "data": patient_body(pid),
+            }
+        ]
+    }
     assert client.post("/api/v1/sync/push", json=push, headers=auth["admin"]).json()["rejected"] == 1
 
 

@@ -25,22 +25,36 @@ from tests.sync_sites import Sites, cli, record_case
 
 PASSPHRASE = "horse staple battery correct"
 # Argon2id at its cheapest and small chunks, so that a test backup spans several chunks.
-FAST_BACKUP_ENV = {"BURNEDGE_BACKUP_KDF_OPSLIMIT": "1", "BURNEDGE_BACKUP_KDF_MEMORY_KIB": "8",
-                   "BURNEDGE_BACKUP_CHUNK_KIB": "16", "BACKUP_PASSPHRASE": PASSPHRASE}  # fmt: skip
+FAST_BACKUP_ENV = {
+    "BURNEDGE_BACKUP_KDF_OPSLIMIT": "1",
+    "BURNEDGE_BACKUP_KDF_MEMORY_KIB": "8",
+    "BURNEDGE_BACKUP_CHUNK_KIB": "16",
+    "BACKUP_PASSPHRASE": PASSPHRASE,
+}
 
 
 def burnedge(*args: str, env: dict[str, str] | None = None) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "gateway.cli", *args], capture_output=True, text=True, cwd=REPO,
-                          env={**os.environ, **FAST_HASH_ENV, **FAST_BACKUP_ENV, **(env or {})}, timeout=120)  # fmt: skip
+    return subprocess.run(
+        [sys.executable, "-m", "gateway.cli", *args],
+        capture_output=True,
+        text=True,
+        cwd=REPO,
+        env={**os.environ, **FAST_HASH_ENV, **FAST_BACKUP_ENV, **(env or {})},
+        timeout=120,
+    )
 
 
 def serve(config: Path, folder: Path) -> tuple[subprocess.Popen, str]:
     port = free_port()
     log = folder / "restored-gateway.log"
     with open(log, "ab") as out:
-        proc = subprocess.Popen([sys.executable, "-m", "gateway.cli", "--config", str(config), "serve", "--port",
-                                 str(port)], cwd=REPO, stdout=out, stderr=subprocess.STDOUT,
-                                env={**os.environ, "BURNEDGE_JOBS_WORKERS": "0"})  # fmt: skip
+        proc = subprocess.Popen(
+            [sys.executable, "-m", "gateway.cli", "--config", str(config), "serve", "--port", str(port)],
+            cwd=REPO,
+            stdout=out,
+            stderr=subprocess.STDOUT,
+            env={**os.environ, "BURNEDGE_JOBS_WORKERS": "0"},
+        )
     url = f"http://127.0.0.1:{port}"
     wait_healthy(proc, url, log, 30, "restored gateway")
     return proc, url
@@ -85,8 +99,15 @@ def test_a_backup_taken_under_a_write_burst_restores_every_acknowledged_write(se
     while len(burst.acknowledged) < 20:
         time.sleep(0.01)
     started = time.monotonic()
-    made = burnedge("--db", str(db), "backup", "--out", str(tmp_path / "nightly.burnedge-backup"),
-                    "--passphrase-env", "BACKUP_PASSPHRASE")  # fmt: skip
+    made = burnedge(
+        "--db",
+        str(db),
+        "backup",
+        "--out",
+        str(tmp_path / "nightly.burnedge-backup"),
+        "--passphrase-env",
+        "BACKUP_PASSPHRASE",
+    )
     finished = time.monotonic()
     time.sleep(0.2)
     burst.stop.set()
@@ -99,8 +120,14 @@ def test_a_backup_taken_under_a_write_burst_restores_every_acknowledged_write(se
     assert summary["skipped"] == [] and summary["audit_head"]["seq"] > 0
 
     into = tmp_path / "restored"
-    restored = burnedge("restore", str(tmp_path / "nightly.burnedge-backup"), "--into", str(into),
-                        "--passphrase-env", "BACKUP_PASSPHRASE")  # fmt: skip
+    restored = burnedge(
+        "restore",
+        str(tmp_path / "nightly.burnedge-backup"),
+        "--into",
+        str(into),
+        "--passphrase-env",
+        "BACKUP_PASSPHRASE",
+    )
     assert restored.returncode == 0, restored.stderr
     config = into / "burnedge.toml"
     verified = burnedge("--config", str(config), "audit", "verify")
@@ -132,8 +159,11 @@ def test_a_backup_taken_under_a_write_burst_restores_every_acknowledged_write(se
         missing = [pid for pid in before if client.http.get(f"/api/v1/patients/{pid}").status_code != 200]
         assert missing == [], f"{len(missing)} of {len(before)} writes acknowledged before the backup are missing"
         sha = assets[0][0]
-        asset = next(a for a in client.get(f"/api/v1/encounters/{_encounter(into / db.name)}/assets", "assets")
-                     if a["sha256"] == sha)  # fmt: skip
+        asset = next(
+            a
+            for a in client.get(f"/api/v1/encounters/{_encounter(into / db.name)}/assets", "assets")
+            if a["sha256"] == sha
+        )
         content = client.http.get(f"/api/v1/assets/{asset['id']}/file")
         assert content.status_code == 200 and hashlib.sha256(content.content).hexdigest() == sha
     finally:
@@ -151,11 +181,28 @@ def small_backup(tmp_path_factory) -> Path:
     """A backup of a gateway with an account and keys, spanning several 16 KiB chunks."""
     folder = tmp_path_factory.mktemp("small")
     db = folder / "g.sqlite3"
-    cli("--db", str(db), "users", "add", "--username", "admin", "--role", "admin", "--password-stdin",
-        stdin=PASSWORD + "\n")  # fmt: skip
+    cli(
+        "--db",
+        str(db),
+        "users",
+        "add",
+        "--username",
+        "admin",
+        "--role",
+        "admin",
+        "--password-stdin",
+        stdin=PASSWORD + "\n",
+    )
     cli("--db", str(db), "keys", "init", "--site-id", "clinic-small", "--name", "Small clinic")
-    r = burnedge("--db", str(db), "backup", "--out", str(folder / "small.burnedge-backup"), "--passphrase-env",
-                 "BACKUP_PASSPHRASE")  # fmt: skip
+    r = burnedge(
+        "--db",
+        str(db),
+        "backup",
+        "--out",
+        str(folder / "small.burnedge-backup"),
+        "--passphrase-env",
+        "BACKUP_PASSPHRASE",
+    )
     assert r.returncode == 0, r.stderr
     return folder / "small.burnedge-backup"
 
@@ -183,24 +230,50 @@ def _damaged(small_backup: Path, tmp_path: Path, how: str) -> Path:
     return out
 
 
-@pytest.mark.parametrize("how, words", [("flip", "damaged or was altered"), ("header", "header is damaged"),
-                                        ("cut-mid-chunk", "cut short"), ("cut-at-chunk", "cut short")])  # fmt: skip
+@pytest.mark.parametrize(
+    "how, words",
+    [
+        ("flip", "damaged or was altered"),
+        ("header", "header is damaged"),
+        ("cut-mid-chunk", "cut short"),
+        ("cut-at-chunk", "cut short"),
+    ],
+)
 def test_a_damaged_or_cut_backup_is_refused_and_nothing_is_written(small_backup, tmp_path, how, words):
     into = tmp_path / "restored"
-    r = burnedge("restore", str(_damaged(small_backup, tmp_path, how)), "--into", str(into), "--passphrase-env",
-                 "BACKUP_PASSPHRASE")  # fmt: skip
+    r = burnedge(
+        "restore",
+        str(_damaged(small_backup, tmp_path, how)),
+        "--into",
+        str(into),
+        "--passphrase-env",
+        "BACKUP_PASSPHRASE",
+    )
     assert r.returncode == 2 and words in r.stderr and "use another copy" in r.stderr.lower(), r.stderr
     assert not into.exists()
     empty = tmp_path / "empty"
     empty.mkdir()
-    r = burnedge("restore", str(_damaged(small_backup, tmp_path, how)), "--into", str(empty), "--passphrase-env",
-                 "BACKUP_PASSPHRASE")  # fmt: skip
+    r = burnedge(
+        "restore",
+        str(_damaged(small_backup, tmp_path, how)),
+        "--into",
+        str(empty),
+        "--passphrase-env",
+        "BACKUP_PASSPHRASE",
+    )
     assert r.returncode == 2 and list(empty.iterdir()) == []
 
 
 def test_a_wrong_passphrase_is_refused(small_backup, tmp_path):
-    r = burnedge("restore", str(small_backup), "--into", str(tmp_path / "r"), "--passphrase-env", "WRONG",
-                 env={"WRONG": "not the passphrase at all"})  # fmt: skip
+    r = burnedge(
+        "restore",
+        str(small_backup),
+        "--into",
+        str(tmp_path / "r"),
+        "--passphrase-env",
+        "WRONG",
+        env={"WRONG": "not the passphrase at all"},
+    )
     assert r.returncode == 5 and "wrong passphrase" in r.stderr and not (tmp_path / "r").exists()
 
 
@@ -225,26 +298,57 @@ def test_check_only_verifies(small_backup):
 
 def test_recipient_key_mode_round_trips_and_refuses_another_key(tmp_path):
     db = tmp_path / "g.sqlite3"
-    cli("--db", str(db), "users", "add", "--username", "admin", "--role", "admin", "--password-stdin",
-        stdin=PASSWORD + "\n")  # fmt: skip
+    cli(
+        "--db",
+        str(db),
+        "users",
+        "add",
+        "--username",
+        "admin",
+        "--role",
+        "admin",
+        "--password-stdin",
+        stdin=PASSWORD + "\n",
+    )
     offline, other = tmp_path / "usb-stick", tmp_path / "other"
     assert burnedge("backup", "keygen", "--out", str(offline)).returncode == 0
     assert burnedge("backup", "keygen", "--out", str(other)).returncode == 0
     assert (offline / "backup-recipient.key.json").stat().st_mode & 0o077 == 0
     folder = tmp_path / "backups"
     for _ in range(3):  # rotation: the newest two stay
-        r = burnedge("--db", str(db), "backup", "--dir", str(folder), "--keep", "2", "--recipient",
-                     str(offline / "backup-recipient.pub.json"))  # fmt: skip
+        r = burnedge(
+            "--db",
+            str(db),
+            "backup",
+            "--dir",
+            str(folder),
+            "--keep",
+            "2",
+            "--recipient",
+            str(offline / "backup-recipient.pub.json"),
+        )
         assert r.returncode == 0, r.stderr
     backups = sorted(folder.glob("*.burnedge-backup"))
     assert len(backups) == 2 and not list(folder.glob("*.partial"))
-    r = burnedge("restore", str(backups[-1]), "--into", str(tmp_path / "r1"), "--identity",
-                 str(other / "backup-recipient.key.json"))  # fmt: skip
+    r = burnedge(
+        "restore",
+        str(backups[-1]),
+        "--into",
+        str(tmp_path / "r1"),
+        "--identity",
+        str(other / "backup-recipient.key.json"),
+    )
     assert r.returncode == 5 and "encrypted to recipient key" in r.stderr and not (tmp_path / "r1").exists()
     r = burnedge("restore", str(backups[-1]), "--into", str(tmp_path / "r1"))
     assert r.returncode == 2 and "--identity" in r.stderr
-    r = burnedge("restore", str(backups[-1]), "--into", str(tmp_path / "r1"), "--identity",
-                 str(offline / "backup-recipient.key.json"))  # fmt: skip
+    r = burnedge(
+        "restore",
+        str(backups[-1]),
+        "--into",
+        str(tmp_path / "r1"),
+        "--identity",
+        str(offline / "backup-recipient.key.json"),
+    )
     assert r.returncode == 0, r.stderr
     assert burnedge("--config", str(tmp_path / "r1" / "burnedge.toml"), "audit", "verify").returncode == 0
 
@@ -252,8 +356,13 @@ def test_recipient_key_mode_round_trips_and_refuses_another_key(tmp_path):
 def test_a_passphrase_is_never_taken_from_nowhere(tmp_path):
     db = tmp_path / "g.sqlite3"
     Database(db).migrate()
-    r = subprocess.run([sys.executable, "-m", "gateway.cli", "--db", str(db), "backup", "--out",
-                        str(tmp_path / "b")], capture_output=True, text=True, cwd=REPO, stdin=subprocess.DEVNULL)  # fmt: skip
+    r = subprocess.run(
+        [sys.executable, "-m", "gateway.cli", "--db", str(db), "backup", "--out", str(tmp_path / "b")],
+        capture_output=True,
+        text=True,
+        cwd=REPO,
+        stdin=subprocess.DEVNULL,
+    )
     assert r.returncode == 2 and "--passphrase-file" in r.stderr and not (tmp_path / "b").exists()
 
 
@@ -265,10 +374,12 @@ def test_the_snapshot_takes_finished_analyses_without_scratch_and_leaves_running
     patient = uuid7()
     for job, state in ((uuid7(), "done"), (uuid7(), "running")):
         with db.write() as conn:
-            conn.execute("INSERT INTO analysis_jobs (id, encounter_id, patient_id, input_digest, request, state,"
-                         " priority, max_attempts, next_attempt_at, pictures, created_at, created_by, user_id)"
-                         " VALUES (?, ?, ?, ?, '{}', ?, 0, 3, '', 6, '', 'clin', 'u')",
-                         (job, uuid7(), patient, job, state))  # fmt: skip
+            conn.execute(
+                "INSERT INTO analysis_jobs (id, encounter_id, patient_id, input_digest, request, state,"
+                " priority, max_attempts, next_attempt_at, pictures, created_at, created_by, user_id)"
+                " VALUES (?, ?, ?, ?, '{}', ?, 0, 3, '', 6, '', 'clin', 'u')",
+                (job, uuid7(), patient, job, state),
+            )
         for rel in ("analysis/analysis.json", "analysis/mesh/surface.ply", "source/a.jpg", "analysis/dense/d.bin"):
             (work / job / rel).parent.mkdir(parents=True, exist_ok=True)
             (work / job / rel).write_text(rel)
@@ -283,6 +394,9 @@ def test_the_snapshot_takes_finished_analyses_without_scratch_and_leaves_running
     with snapshot.take(config) as snap:
         assert not stale.exists()
         names = sorted(name for name, _ in snap.files)
-    assert names == [f"analyses/{done}/analysis/analysis.json", f"analyses/{done}/analysis/mesh/surface.ply",
-                     f"analyses/patients/{patient}/track.json"]  # fmt: skip
+    assert names == [
+        f"analyses/{done}/analysis/analysis.json",
+        f"analyses/{done}/analysis/mesh/surface.ply",
+        f"analyses/patients/{patient}/track.json",
+    ]
     assert not list(tmp_path.glob(".burnedge-backup-*")), "the staged database copy is removed"

@@ -33,9 +33,16 @@ TRIANGLE = np.array([[0.0, 0.0, 0.0], [4.0, 0.0, 0.0], [0.0, 3.0, 0.0]])  # area
 
 @pytest.mark.parametrize(
     ("q", "fraction"),
-    [((1, 0, 0), 0.25), ((1, 1, 0), 0.75), ((0, 1, 1), 0.75), ((1, 1, 1), 1.0), ((0, 0, 0), 0.0),
-     ((1, np.nan, 0), 0.25), ((0.9, 0.1, 0.5), 0.5)],
-)  # fmt: skip
+    [
+        ((1, 0, 0), 0.25),
+        ((1, 1, 0), 0.75),
+        ((0, 1, 1), 0.75),
+        ((1, 1, 1), 1.0),
+        ((0, 0, 0), 0.0),
+        ((1, np.nan, 0), 0.25),
+        ((0.9, 0.1, 0.5), 0.5),
+    ],
+)
 def test_single_triangle_is_clipped_at_the_level_line(q, fraction):
     faces = np.array([[0, 1, 2]])
     q = np.array(q, dtype=float)
@@ -97,8 +104,9 @@ def test_sampling_is_bilinear_at_the_projection(views):
     view = views[0]
     u = np.arange(view.width, dtype=np.float32)
     prob = np.tile(u / (view.width - 1), (view.height, 1))
-    sample = projection.sample_view(mesh.vertices, mesh.faces, projection.vertex_normals(mesh.vertices, mesh.faces),
-                                    view, prob)  # fmt: skip
+    sample = projection.sample_view(
+        mesh.vertices, mesh.faces, projection.vertex_normals(mesh.vertices, mesh.faces), view, prob
+    )
     uv, _ = view.project(mesh.vertices)
     assert sample.seen.all()
     np.testing.assert_allclose(sample.p, uv[:, 0] / (view.width - 1), atol=1e-6)
@@ -111,8 +119,13 @@ def test_a_vertex_behind_another_surface_is_not_seen():
     vertices = np.vstack([lower.vertices, upper.vertices + [0.0, 0.0, 20.0]])
     faces = np.vstack([lower.faces, upper.faces + len(lower.vertices)])
     view = ss.look_at("top", np.array([0.0, 0.0, 270.0]), np.zeros(3))
-    sample = projection.sample_view(vertices, faces, projection.vertex_normals(vertices, faces), view,
-                                    np.ones((view.height, view.width), np.float32))  # fmt: skip
+    sample = projection.sample_view(
+        vertices,
+        faces,
+        projection.vertex_normals(vertices, faces),
+        view,
+        np.ones((view.height, view.width), np.float32),
+    )
     n = len(lower.vertices)
     # The ray to (x, y, 0) crosses z = 20 at (x, y) * 250/270, inside the upper sheet while max|x|,|y| < 16.2.
     reach = np.abs(lower.vertices[:, :2]).max(axis=1)
@@ -236,8 +249,9 @@ def test_quartic_and_ridged_references_follow_a_round_limb_where_a_parabola_cann
     # parabola misses the circle by tenths of a mm, which would bias the relief and the volume. A quartic follows
     # it; so does a ridged model (a cylinder is one long ridge), which "auto" may prefer.
     radius = 40.0
-    mesh = ss.sheet(half=37.0, step=1.0,
-                    height=lambda x, y: np.sqrt(radius**2 - x * x) - radius + ss.crater(DEPTH, CRATER_R, x, y))  # fmt: skip
+    mesh = ss.sheet(
+        half=37.0, step=1.0, height=lambda x, y: np.sqrt(radius**2 - x * x) - radius + ss.crater(DEPTH, CRATER_R, x, y)
+    )
     q = ss.disc_probability(mesh.chart_of, CRATER_R, EDGE_MM)(mesh.vertices)
     outward = np.array([0.0, 0.0, 1.0])
     auto = relief.fit_reference(mesh.vertices, mesh.faces, q, outward)

@@ -31,10 +31,21 @@ def jpeg() -> bytes:
 
 
 def picture(captured_at: str | None, offset: str | None = None, uploaded: dt.datetime = UPLOADED) -> Asset:
-    return Asset(id="0192f3b4-6a8f-7000-8000-000000000001", encounter_id="e", kind=AssetKind.photo,
-                 media_type=MediaType.jpeg, sha256="0" * 64, size_bytes=1, filename="p.jpg",
-                 metadata=CaptureMetadata(captured_at=captured_at, captured_offset=offset), verdict=None,
-                 source_asset_id=None, created_at=iso(uploaded), created_by="dr", device_id=None)  # fmt: skip
+    return Asset(
+        id="0192f3b4-6a8f-7000-8000-000000000001",
+        encounter_id="e",
+        kind=AssetKind.photo,
+        media_type=MediaType.jpeg,
+        sha256="0" * 64,
+        size_bytes=1,
+        filename="p.jpg",
+        metadata=CaptureMetadata(captured_at=captured_at, captured_offset=offset),
+        verdict=None,
+        source_asset_id=None,
+        created_at=iso(uploaded),
+        created_by="dr",
+        device_id=None,
+    )
 
 
 def test_a_stamped_jpeg_reads_back_its_time_and_offset_through_the_upload_check():
@@ -65,13 +76,16 @@ def test_the_earliest_picture_counts_and_an_offset_beats_the_configured_zone():
     assert captured.at == iso(dt.datetime(2026, 11, 10, 9, 0, tzinfo=dt.UTC))
 
 
-@pytest.mark.parametrize(("taken", "why"), [
-    (None, "no camera time"),
-    ("0000:00:00 00:00:00", "no camera time"),
-    ("2026:12:01 06:00:00", "camera time after the upload"),  # the phone's clock runs 10 days ahead
-    ("2024:01:01 00:00:00", "camera time over a year before the upload"),
-    ("2026:11:09 12:00:00", "camera time before the injury"),
-])  # fmt: skip
+@pytest.mark.parametrize(
+    ("taken", "why"),
+    [
+        (None, "no camera time"),
+        ("0000:00:00 00:00:00", "no camera time"),
+        ("2026:12:01 06:00:00", "camera time after the upload"),  # the phone's clock runs 10 days ahead
+        ("2024:01:01 00:00:00", "camera time over a year before the upload"),
+        ("2026:11:09 12:00:00", "camera time before the injury"),
+    ],
+)
 def test_an_implausible_or_missing_camera_time_falls_back_to_the_upload(taken, why):
     captured = capture_time([picture(taken)], INJURY, NAIROBI)
     assert captured.source is CaptureTimeSource.upload and captured.detail == f"upload time: 1: {why}"

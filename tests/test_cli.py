@@ -81,12 +81,29 @@ def test_every_command_help_shows_an_example(command, parser):
 
 
 def test_schemas_export_writes_a_json_schema_per_message(tmp_path):
-    r = subprocess.run([sys.executable, "-m", "gateway.cli", "schemas", "export", str(tmp_path)], capture_output=True,
-                       text=True, cwd=REPO)  # fmt: skip
+    r = subprocess.run(
+        [sys.executable, "-m", "gateway.cli", "schemas", "export", str(tmp_path)],
+        capture_output=True,
+        text=True,
+        cwd=REPO,
+    )
     assert r.returncode == 0, r.stderr
     names = {p.stem for p in tmp_path.glob("*.json")} - {"index"}
-    for required in ("Patient", "Encounter", "Intake", "PrimarySurvey", "SecondarySurvey", "Mechanism", "BurnChart",
-                     "TbsaResult", "FluidPlan", "ReferralAssessment", "Mutation", "ChangesPage", "Problem"):  # fmt: skip
+    for required in (
+        "Patient",
+        "Encounter",
+        "Intake",
+        "PrimarySurvey",
+        "SecondarySurvey",
+        "Mechanism",
+        "BurnChart",
+        "TbsaResult",
+        "FluidPlan",
+        "ReferralAssessment",
+        "Mutation",
+        "ChangesPage",
+        "Problem",
+    ):
         assert required in names
     patient = json.loads((tmp_path / "Patient.json").read_text())
     props = patient["$defs"]["Patient"]["properties"]
@@ -112,9 +129,25 @@ def test_every_input_message_refuses_unknown_fields():
 
 def test_users_add_rejects_a_short_password(tmp_path):
     r = subprocess.run(
-        [sys.executable, "-m", "gateway.cli", "--db", str(tmp_path / "u.sqlite3"), "users", "add", "--username",
-         "dr.a", "--role", "clinician", "--password-stdin"], input="short\n", capture_output=True, text=True, cwd=REPO,
-    )  # fmt: skip
+        [
+            sys.executable,
+            "-m",
+            "gateway.cli",
+            "--db",
+            str(tmp_path / "u.sqlite3"),
+            "users",
+            "add",
+            "--username",
+            "dr.a",
+            "--role",
+            "clinician",
+            "--password-stdin",
+        ],
+        input="short\n",
+        capture_output=True,
+        text=True,
+        cwd=REPO,
+    )
     assert r.returncode == 2 and "10+ characters" in r.stderr
 
 
@@ -156,6 +189,7 @@ def test_global_options_work_before_and_after_the_command(tmp_path):
         assert r.returncode == 3 and f"no database at {missing}" in r.stderr, (args, r.stderr)
     config = tmp_path / "burnedge.toml"
     config.write_text(f'[gateway]\ndatabase = "{tmp_path / "from-config.sqlite3"}"\n')
-    parsed = build_parser().parse_args(["--config", str(config), "users", "add", "--username", "amani", "--role",
-                                        "nurse", "-v"])  # fmt: skip
+    parsed = build_parser().parse_args(
+        ["--config", str(config), "users", "add", "--username", "amani", "--role", "nurse", "-v"]
+    )
     assert (parsed.config, parsed.db, parsed.verbose) == (str(config), None, True)

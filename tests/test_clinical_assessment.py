@@ -204,8 +204,9 @@ def test_chart_assessed_before_the_injury_is_a_caveat():
 
 def test_assess_needs_the_clock_skew():
     with pytest.raises(TypeError, match="clock_skew_s"):
-        assess(patient=patient(), encounter=encounter(), parts={}, inputs=[], as_of=AS_OF, config=CONFIG,
-               computed_at=AS_OF)  # fmt: skip
+        assess(
+            patient=patient(), encounter=encounter(), parts={}, inputs=[], as_of=AS_OF, config=CONFIG, computed_at=AS_OF
+        )
 
 
 def test_configured_clock_skew_is_passed_to_the_fluid_plan():

@@ -29,8 +29,15 @@ def test_file_then_environment(tmp_path):
     assert (cfg.gateway.port, cfg.gateway.host, cfg.clinical.child_max_age_years) == (9100, "0.0.0.0", 15.0)
 
 
-@pytest.mark.parametrize("text", ["[gateway]\nport = 0\n", "[gateway]\nportt = 1\n", "[gateway\n",
-                                  "[security]\nargon2_memory_kib = 8\nargon2_parallelism = 4\n"])  # fmt: skip
+@pytest.mark.parametrize(
+    "text",
+    [
+        "[gateway]\nport = 0\n",
+        "[gateway]\nportt = 1\n",
+        "[gateway\n",
+        "[security]\nargon2_memory_kib = 8\nargon2_parallelism = 4\n",
+    ],
+)
 def test_bad_config_is_refused_with_a_reason(tmp_path, text):
     f = tmp_path / "c.toml"
     f.write_text(text)

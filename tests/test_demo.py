@@ -13,8 +13,24 @@ from tests.conftest import FAST_HASH_ENV, REPO, free_port
 
 def test_the_demo_uploads_analyses_and_aligns_four_visits_then_exits(tmp_path):
     db = tmp_path / "demo.sqlite3"
-    args = [sys.executable, "-m", "gateway.cli", "--db", str(db), "demo", "--exit", "--port", str(free_port()),
-            "--views", "6", "--size", "960x720", "--clinician-masks", "--phantoms", str(tmp_path / "phantoms")]  # fmt: skip
+    args = [
+        sys.executable,
+        "-m",
+        "gateway.cli",
+        "--db",
+        str(db),
+        "demo",
+        "--exit",
+        "--port",
+        str(free_port()),
+        "--views",
+        "6",
+        "--size",
+        "960x720",
+        "--clinician-masks",
+        "--phantoms",
+        str(tmp_path / "phantoms"),
+    ]
     env = {**FAST_HASH_ENV, "PATH": "", "BURNEDGE_JOBS_POLL_S": "0.3", "BURNEDGE_JOBS_NICE": "0"}
     run = subprocess.run(args, capture_output=True, text=True, cwd=REPO, env=env, timeout=900)
     assert run.returncode == 0, run.stderr[-4000:]

@@ -101,8 +101,20 @@ def test_frames_are_turned_upright_from_the_display_rotation(tmp_path, rotation)
 
 @pytest.mark.skipif(not (SHARED / "phantoms" / "p2_foot" / "video.mp4").exists(), reason="needs ../shared/phantoms")
 def test_cli_frames_on_the_phantom_orbit_video(tmp_path):
-    r = subprocess.run([sys.executable, "-m", "gateway.cli", "frames", str(SHARED / "phantoms" / "p2_foot" / "video.mp4"),
-                        "--out", str(tmp_path)], capture_output=True, text=True, cwd=REPO)  # fmt: skip
+    r = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "gateway.cli",
+            "frames",
+            str(SHARED / "phantoms" / "p2_foot" / "video.mp4"),
+            "--out",
+            str(tmp_path),
+        ],
+        capture_output=True,
+        text=True,
+        cwd=REPO,
+    )
     assert r.returncode == 0, r.stderr
     listing = json.loads((tmp_path / "frames.json").read_text())
     assert len(listing["frames"]) == 15 and listing["decoded"] == 300
@@ -154,8 +166,10 @@ def test_a_video_the_extractor_fails_on_does_not_stop_the_others(client, auth, s
         return real(path, *args, **kwargs)
 
     monkeypatch.setattr(frames_service, "extract", extract_or_crash)
-    ids = [upload(client, h, enc, data, name)[1].headers["burnedge-asset-id"]
-           for data, name in ((first, "first.mp4"), (video(tmp_path / "second.mp4", seconds=1.5), "second.mp4"))]  # fmt: skip
+    ids = [
+        upload(client, h, enc, data, name)[1].headers["burnedge-asset-id"]
+        for data, name in ((first, "first.mp4"), (video(tmp_path / "second.mp4", seconds=1.5), "second.mp4"))
+    ]
     assert services.frames.extract_pending() == 2
     assert len(_frame_rows(services, ids[1])) > 0  # the second video got its frames all the same
     # One more try at the next run (the failure may have been the gateway stopping), then no more.

@@ -60,8 +60,10 @@ class Findings:
 
     def summary(self) -> str:
         parts = [f"{len(self.by_key)} distinct failures in {self.requests} requests:"]
-        parts += [f"  {op} as {role}: {title} (status {status}, {self.counts[op, role, title, status]}x)"
-                  for op, role, title, status in self.by_key]  # fmt: skip
+        parts += [
+            f"  {op} as {role}: {title} (status {status}, {self.counts[op, role, title, status]}x)"
+            for op, role, title, status in self.by_key
+        ]
         for key, text in self.by_key.items():
             parts.append(f"\n=== {key[0]} as {key[1]} ({self.counts[key]}x): {text}")
         return "\n".join(parts)
@@ -102,8 +104,14 @@ def _fuzz(operation, role: str, headers: dict[str, str], mode: str, known: dict[
     strategy = operation.as_strategy(generation_mode=generation, path_parameters=fixed, headers=preconditions)
     session = requests.Session()
 
-    @settings(max_examples=EXAMPLES[mode], derandomize=True, database=None, deadline=None,
-              phases=[Phase.explicit, Phase.generate], suppress_health_check=list(HealthCheck))  # fmt: skip
+    @settings(
+        max_examples=EXAMPLES[mode],
+        derandomize=True,
+        database=None,
+        deadline=None,
+        phases=[Phase.explicit, Phase.generate],
+        suppress_health_check=list(HealthCheck),
+    )
     @given(case=strategy)
     def run(case) -> None:
         findings.requests += 1
@@ -111,8 +119,10 @@ def _fuzz(operation, role: str, headers: dict[str, str], mode: str, known: dict[
         try:
             response = case.call(session=session, headers=headers, timeout=30)
         except requests.RequestException as exc:
-            findings.add((operation.label, role, "transport", type(exc).__name__),
-                         lambda e=exc: f"no answer: {e!r}\n{case.as_curl_command(headers=headers)}")  # fmt: skip
+            findings.add(
+                (operation.label, role, "transport", type(exc).__name__),
+                lambda e=exc: f"no answer: {e!r}\n{case.as_curl_command(headers=headers)}",
+            )
             return
         findings.statuses[response.status_code] += 1
         try:
@@ -132,8 +142,24 @@ def test_every_operation_answers_as_the_published_schema_says(gateway_process):
     for role in ROLES:
         add_user_cli(gateway_process.db, role, role)
     # Site keys, so that sending a case to the burn center gets past "this site has no keys" (a true 503) and is queued.
-    subprocess.run([sys.executable, "-m", "gateway.cli", "--db", str(gateway_process.db), "keys", "init", "--site-id",
-                    "clinic-fuzz", "--name", "Fuzz clinic"], check=True, capture_output=True, cwd=REPO)  # fmt: skip
+    subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "gateway.cli",
+            "--db",
+            str(gateway_process.db),
+            "keys",
+            "init",
+            "--site-id",
+            "clinic-fuzz",
+            "--name",
+            "Fuzz clinic",
+        ],
+        check=True,
+        capture_output=True,
+        cwd=REPO,
+    )
     # The fuzz sends many wrong passwords from one address; the throttle (tested in test_auth) would lock out the
     # logins the fuzz itself needs.
     gateway_process.env = {"BURNEDGE_SECURITY_LOGIN_FREE_FAILURES": "1000000"}

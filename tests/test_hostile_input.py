@@ -38,8 +38,12 @@ def served(gateway_process):
 def test_deeply_nested_json_is_a_400_with_one_warning_line_on_anonymous_and_authenticated_routes(served):
     gw, http = served
     anonymous = {"content-type": "application/json", "Authorization": ""}
-    for path, headers in [("/api/v1/auth/login", anonymous), ("/api/v1/auth/pair", anonymous),
-                          ("/api/v1/patients", {}), ("/api/v1/sync/push", {})]:  # fmt: skip
+    for path, headers in [
+        ("/api/v1/auth/login", anonymous),
+        ("/api/v1/auth/pair", anonymous),
+        ("/api/v1/patients", {}),
+        ("/api/v1/sync/push", {}),
+    ]:
         r = http.post(path, content=NESTED, headers={"content-type": "application/json", **headers})
         assert r.status_code == 400, (path, r.text)
         assert r.headers["content-type"].startswith("application/problem+json")
@@ -49,8 +53,13 @@ def test_deeply_nested_json_is_a_400_with_one_warning_line_on_anonymous_and_auth
     assert log.count("nested too deeply") == 4 and "Traceback" not in log and "RecursionError" not in log
 
 
-VARIANTS = {"newline": lambda i: i + "\n", "space": lambda i: " " + i, "tab": lambda i: i + "\t",
-            "upper-case": str.upper, "no-dashes": lambda i: i.replace("-", "")}  # fmt: skip
+VARIANTS = {
+    "newline": lambda i: i + "\n",
+    "space": lambda i: " " + i,
+    "tab": lambda i: i + "\t",
+    "upper-case": str.upper,
+    "no-dashes": lambda i: i.replace("-", ""),
+}
 
 
 @pytest.mark.parametrize("variant", VARIANTS.values(), ids=VARIANTS.keys())

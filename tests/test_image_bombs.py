@@ -54,8 +54,9 @@ _MEASURE = textwrap.dedent(
 def measure(tmp_path: Path, data: bytes) -> dict:
     picture = tmp_path / "picture"
     picture.write_bytes(data)
-    done = subprocess.run([sys.executable, "-c", _MEASURE, str(picture)], capture_output=True, text=True,
-                          cwd=REPO, timeout=120)  # fmt: skip
+    done = subprocess.run(
+        [sys.executable, "-c", _MEASURE, str(picture)], capture_output=True, text=True, cwd=REPO, timeout=120
+    )
     assert done.returncode == 0, done.stderr
     return json.loads(done.stdout.strip().splitlines()[-1])
 
@@ -72,8 +73,10 @@ def normal_photo(tmp_path_factory) -> dict:
 )
 def test_a_picture_bomb_is_refused_at_once_with_flat_memory(tmp_path, normal_photo, make):
     bomb = measure(tmp_path, make())
-    print(f"\nbomb: {bomb['seconds'] * 1000:.1f} ms, +{bomb['peak_growth'] / MB:.1f} MB peak; "
-          f"12 MP JPEG: {normal_photo['seconds'] * 1000:.1f} ms, +{normal_photo['peak_growth'] / MB:.1f} MB")  # fmt: skip
+    print(
+        f"\nbomb: {bomb['seconds'] * 1000:.1f} ms, +{bomb['peak_growth'] / MB:.1f} MB peak; "
+        f"12 MP JPEG: {normal_photo['seconds'] * 1000:.1f} ms, +{normal_photo['peak_growth'] / MB:.1f} MB"
+    )
     assert bomb["refused"] and "refused without decoding" in bomb["refused"]
     assert bomb["seconds"] < 0.1
     assert bomb["peak_growth"] < 8 * MB, "refusing a bomb must not allocate in proportion to its declared size"

@@ -34,9 +34,18 @@ def enqueue(queue: JobQueue, priority: int, encounter: str | None = None) -> str
             "INSERT INTO analysis_jobs (id, encounter_id, patient_id, input_digest, request, state, priority,"
             " max_attempts, next_attempt_at, pictures, created_at, created_by, user_id) VALUES"
             " (?,?,?,?,?,'queued',?,?,?,6,?,'dr','u1')",
-            (job_id, encounter or uuid7(), "p1", job_id, msgspec.json.encode(JobInputs(pictures=[])).decode(),
-             priority, queue.conf.max_attempts, now, now),
-        )  # fmt: skip
+            (
+                job_id,
+                encounter or uuid7(),
+                "p1",
+                job_id,
+                msgspec.json.encode(JobInputs(pictures=[])).decode(),
+                priority,
+                queue.conf.max_attempts,
+                now,
+                now,
+            ),
+        )
     time.sleep(0.002)  # distinct created_at
     return job_id
 
@@ -142,8 +151,7 @@ def test_retention_keeps_a_finished_analysis_results_and_drops_its_scratch(tmp_p
     from gateway.jobs.folders import artifacts, clean_up, job_dir
     from schemas.config import Config, GatewayConfig
 
-    config = Config(gateway=GatewayConfig(database=str(tmp_path / "q.sqlite3")),
-                    jobs=JobsConfig(retention_days=1.0))  # fmt: skip
+    config = Config(gateway=GatewayConfig(database=str(tmp_path / "q.sqlite3")), jobs=JobsConfig(retention_days=1.0))
     db = Database.from_config(config.gateway)
     db.migrate()
     queue = JobQueue(db, config.jobs)
@@ -153,14 +161,23 @@ def test_retention_keeps_a_finished_analysis_results_and_drops_its_scratch(tmp_p
         assert claim.job_id == job_id  # same priority: oldest first
         queue.finish(claim, state, error=None, message=state.value)
         folder = job_dir(config, claim.job_id)
-        for name in ("source/a.jpg", "analysis/images/a.jpg", "analysis/dense/fused_points.ply",
-                     "analysis/sfm/database.db", "analysis/analysis.json", "analysis/surface/burn_surface.glb",
-                     "analysis/surface/burn_surface.npz", "analysis/mesh/surface.ply"):  # fmt: skip
+        for name in (
+            "source/a.jpg",
+            "analysis/images/a.jpg",
+            "analysis/dense/fused_points.ply",
+            "analysis/sfm/database.db",
+            "analysis/analysis.json",
+            "analysis/surface/burn_surface.glb",
+            "analysis/surface/burn_surface.npz",
+            "analysis/mesh/surface.ply",
+        ):
             (folder / name).parent.mkdir(parents=True, exist_ok=True)
             (folder / name).write_bytes(b"x")
     with db.write() as conn:
-        conn.execute("UPDATE analysis_jobs SET finished_at = '2000-01-01T00:00:00.000000+00:00' WHERE id IN (?, ?)",
-                     (old_done, old_failed))  # fmt: skip
+        conn.execute(
+            "UPDATE analysis_jobs SET finished_at = '2000-01-01T00:00:00.000000+00:00' WHERE id IN (?, ?)",
+            (old_done, old_failed),
+        )
     assert clean_up(db, config) == 2
     kept = job_dir(config, old_done)
     assert not (kept / "source").exists() and not (kept / "analysis/dense").exists()

@@ -34,8 +34,9 @@ CONF = TrackingConfig()
 
 
 def cli(*args: str) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "gateway.cli", *args], capture_output=True, text=True, cwd=REPO,
-                          timeout=600)  # fmt: skip
+    return subprocess.run(
+        [sys.executable, "-m", "gateway.cli", *args], capture_output=True, text=True, cwd=REPO, timeout=600
+    )
 
 
 # --- healing figures ---------------------------------------------------------------------------------------------
@@ -122,16 +123,19 @@ def test_day_21_rule_triggers_on_an_open_burn_and_counts_a_tiny_one_as_healed():
 
 def test_projected_day_21_rule_looks_ahead_until_day_21_is_reached():
     days = [0, 7, 14]
-    late = healing.projected_day21_flag(CONF, days, healing.projected_closure(healing.healing_rate(days,
-                                                                                                   [16.0, 12, 8])))  # fmt: skip
+    late = healing.projected_day21_flag(
+        CONF, days, healing.projected_closure(healing.healing_rate(days, [16.0, 12, 8]))
+    )
     assert late.evaluable and late.triggered and "day 28" in late.detail
-    quick = healing.projected_day21_flag(CONF, days, healing.projected_closure(healing.healing_rate(days,
-                                                                                                    [9.0, 5.5, 2])))  # fmt: skip
+    quick = healing.projected_day21_flag(
+        CONF, days, healing.projected_closure(healing.healing_rate(days, [9.0, 5.5, 2]))
+    )
     assert quick.evaluable and not quick.triggered
     past = healing.projected_day21_flag(CONF, [0, 21], healing.Projection(30.0, 25.0, 35.0))
     assert not past.evaluable and past.detail.startswith("not needed")
-    unknown = healing.projected_day21_flag(CONF, [0, 7], healing.projected_closure(healing.healing_rate([0, 7],
-                                                                                                        [9.0, 5.0])))  # fmt: skip
+    unknown = healing.projected_day21_flag(
+        CONF, [0, 7], healing.projected_closure(healing.healing_rate([0, 7], [9.0, 5.0]))
+    )
     assert not unknown.evaluable and "three measured visits" in unknown.detail
 
 
@@ -161,8 +165,13 @@ class Synthetic:
     faces: np.ndarray
 
 
-def synthetic_surface(turn_deg: float, shift: tuple[float, float], burn_radius_mm: float, texture_seed: int = 3,
-                      bumps=((30.0, -20.0, 1.5), (-45.0, 15.0, 1.0), (10.0, 25.0, -1.2))) -> Synthetic:  # fmt: skip
+def synthetic_surface(
+    turn_deg: float,
+    shift: tuple[float, float],
+    burn_radius_mm: float,
+    texture_seed: int = 3,
+    bumps=((30.0, -20.0, 1.5), (-45.0, 15.0, 1.0), (10.0, 25.0, -1.2)),
+) -> Synthetic:
     """The limb turned about the vertical and shifted on a drape that stays put: vertices in the visit's frame;
     its true transform to the unmoved limb's frame is the inverse of that motion."""
     step = 0.5
@@ -210,8 +219,9 @@ def test_registration_recovers_a_known_limb_motion_on_healthy_skin_and_ignores_t
     follow = moved_limb.surface
     result = registration.register(CONF, baseline_limb.surface, follow)
     truth = np.linalg.inv(motion(155.0, (12.0, -7.0)))
-    skin = follow.vertices[registration.skin_mask(CONF, follow, follow.burn_points, 25.0, [follow.burn_points],
-                                                  follow.vertices[:, 2] > 4)]  # fmt: skip
+    skin = follow.vertices[
+        registration.skin_mask(CONF, follow, follow.burn_points, 25.0, [follow.burn_points], follow.vertices[:, 2] > 4)
+    ]
     assert rms_apart(np.array(result.transform_to_baseline), truth, skin) < 0.3
     assert result.rmse_mm < 0.1 and result.overlap > 0.8 and result.warning == ""
     assert result.texture_agreement > 0.5 and result.ransac_agreeing >= 2 and result.burn_shift_mm < 2
@@ -228,22 +238,37 @@ def test_registration_of_a_different_limb_carries_a_warning(baseline_limb):
 # --- track.run on hand-made analysis folders ---------------------------------------------------------------------
 
 
-def write_analysis(folder: Path, status: AnalysisStatus, limb: Synthetic | None = None, area: float | None = None,
-                   failure: FailureCode | None = None) -> Path:  # fmt: skip
+def write_analysis(
+    folder: Path,
+    status: AnalysisStatus,
+    limb: Synthetic | None = None,
+    area: float | None = None,
+    failure: FailureCode | None = None,
+) -> Path:
     """An analysis folder as `burnedge analyze` leaves it, as far as the track reads it."""
     scaled = status is AnalysisStatus.ok
-    metrics = BurnMetrics(area_cm2=area if scaled else None, perimeter_cm=10.0 if scaled else None,
-                          relief_max_mm=1.0 if scaled else None, volume_cm3=0.5 if scaled else None,
-                          area_model_units2=None if scaled else 3.0)  # fmt: skip
-    write_json(folder / "analysis.json", AnalysisResult(status=status, metrics=metrics, failure=failure,
-                                                        reason=None if scaled else "as the test says"))  # fmt: skip
+    metrics = BurnMetrics(
+        area_cm2=area if scaled else None,
+        perimeter_cm=10.0 if scaled else None,
+        relief_max_mm=1.0 if scaled else None,
+        volume_cm3=0.5 if scaled else None,
+        area_model_units2=None if scaled else 3.0,
+    )
+    write_json(
+        folder / "analysis.json",
+        AnalysisResult(status=status, metrics=metrics, failure=failure, reason=None if scaled else "as the test says"),
+    )
     if limb is not None:
         s = limb.surface
         (folder / "surface").mkdir(parents=True, exist_ok=True)
-        np.savez_compressed(folder / track.SURFACE, vertices=s.vertices, faces=limb.faces, q=s.burn.astype(float),
-                            views_per_vertex=np.full(len(s.vertices), 4))  # fmt: skip
-        mesh = o3d.geometry.TriangleMesh(o3d.utility.Vector3dVector(s.vertices),
-                                         o3d.utility.Vector3iVector(limb.faces))  # fmt: skip
+        np.savez_compressed(
+            folder / track.SURFACE,
+            vertices=s.vertices,
+            faces=limb.faces,
+            q=s.burn.astype(float),
+            views_per_vertex=np.full(len(s.vertices), 4),
+        )
+        mesh = o3d.geometry.TriangleMesh(o3d.utility.Vector3dVector(s.vertices), o3d.utility.Vector3iVector(limb.faces))
         mesh.vertex_colors = o3d.utility.Vector3dVector(np.repeat(s.grey[:, None], 3, axis=1))
         (folder / "mesh").mkdir(parents=True, exist_ok=True)
         o3d.io.write_triangle_mesh(str(folder / track.MESH), mesh)
@@ -254,12 +279,14 @@ def test_track_lists_failed_unscaled_and_missing_visits_and_takes_the_first_scal
     tmp_path, baseline_limb, moved_limb
 ):
     visits = [
-        track.SessionAnalysis(0, write_analysis(tmp_path / "a0", AnalysisStatus.failed, failure=FailureCode.too_few_placed)),
+        track.SessionAnalysis(
+            0, write_analysis(tmp_path / "a0", AnalysisStatus.failed, failure=FailureCode.too_few_placed)
+        ),
         track.SessionAnalysis(2, write_analysis(tmp_path / "a1", AnalysisStatus.ok, baseline_limb, area=12.0), "first"),
         track.SessionAnalysis(5, write_analysis(tmp_path / "a2", AnalysisStatus.unscaled)),
         track.SessionAnalysis(9, tmp_path / "never-analysed"),
         track.SessionAnalysis(16, write_analysis(tmp_path / "a4", AnalysisStatus.ok, moved_limb, area=6.0)),
-    ]  # fmt: skip
+    ]
     out = tmp_path / "track"
     result = msgspec.json.decode(track.run(CONF, visits, out).read_bytes(), type=TrackResult)
     s = result.sessions
@@ -315,8 +342,12 @@ def test_cli_track_refuses_bad_days_and_missing_folders_before_analysing(tmp_pat
     a, b, out = tmp_path / "a", tmp_path / "b", str(tmp_path / "out")
     a.mkdir()
     b.mkdir()
-    for days, code, message in (("0,7,14", 2, "3 day(s) for 2 visit folder(s)"), ("7,0", 2, "must not decrease"),
-                                ("0,seven", 2, "numbers separated by commas"), ("-1,3", 2, "must be 0 or more")):  # fmt: skip
+    for days, code, message in (
+        ("0,7,14", 2, "3 day(s) for 2 visit folder(s)"),
+        ("7,0", 2, "must not decrease"),
+        ("0,seven", 2, "numbers separated by commas"),
+        ("-1,3", 2, "must be 0 or more"),
+    ):
         assert cli_main(["track", str(a), str(b), f"--days={days}", "--out", out]) == code
         assert message in capsys.readouterr().err
     assert cli_main(["track", str(a), str(tmp_path / "nowhere"), "--days", "0,7", "--out", out]) == 3
@@ -354,8 +385,12 @@ def test_cli_track_on_a_rendered_series_meets_the_registration_and_area_change_g
         error = rms_apart(np.array(row.transform_to_baseline), truth, eval_skin(follow, frame))
         assert error <= 1.0, (entry["dir"], error)
         assert row.registration_warning == "" and row.registration_rmse_mm < CONF.max_rmse_mm
-    true_rate = -np.polyfit([s["day"] for s in series["sessions"]], [s["burn_area_cm2"] for s in series["sessions"]],
-                            1)[0]  # fmt: skip
+    true_rate = -np.polyfit(
+        [s["day"] for s in series["sessions"]], [s["burn_area_cm2"] for s in series["sessions"]], 1
+    )[0]
     assert result.healing_rate_cm2_per_day == pytest.approx(true_rate, rel=0.1)
-    assert result.projected_closure_day is not None and [f.evaluable for f in result.stall_flags] == [False, True,
-                                                                                                        False]  # fmt: skip
+    assert result.projected_closure_day is not None and [f.evaluable for f in result.stall_flags] == [
+        False,
+        True,
+        False,
+    ]

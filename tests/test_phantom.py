@@ -29,8 +29,14 @@ from schemas.phantom import PHANTOM_FORMAT, BurnLook, PhantomShape, PhantomSpec,
 from tests.conftest import REPO, SHARED
 
 SPEC = PhantomSpec(views=6, width=640, height=480, seed=7, depth_mm=2.5)
-FIGURES = ["area_rel_diff_mesh_vs_quadrature", "ref_area_rel_diff", "perimeter_rel_diff", "volume_rel_diff",
-           "mean_depth_rel_diff", "max_depth_rel_diff"]  # fmt: skip
+FIGURES = [
+    "area_rel_diff_mesh_vs_quadrature",
+    "ref_area_rel_diff",
+    "perimeter_rel_diff",
+    "volume_rel_diff",
+    "mean_depth_rel_diff",
+    "max_depth_rel_diff",
+]
 
 
 @pytest.fixture(scope="module")
@@ -206,10 +212,16 @@ def test_the_series_shrinks_the_burn_and_moves_the_limb_rigidly(series):
             assert not np.allclose(transform, np.eye(4)) and truth.cameras != day0.cameras
 
 
-@pytest.mark.parametrize(("change", "words"), [
-    ({"views": 3}, "views"), ({"area_cm2": 55.0}, "area_cm2"), ({"tone": "VII"}, "tone"),
-    ({"distance_min_mm": 400.0, "distance_max_mm": 300.0}, "distance_min_mm"), ({"marker_ids": [4, 4, 9]}, "marker_ids"),
-])  # fmt: skip
+@pytest.mark.parametrize(
+    ("change", "words"),
+    [
+        ({"views": 3}, "views"),
+        ({"area_cm2": 55.0}, "area_cm2"),
+        ({"tone": "VII"}, "tone"),
+        ({"distance_min_mm": 400.0, "distance_max_mm": 300.0}, "distance_min_mm"),
+        ({"marker_ids": [4, 4, 9]}, "marker_ids"),
+    ],
+)
 def test_bad_specs_are_refused_with_a_reason(tmp_path, change, words):
     with pytest.raises(InvalidInput, match=words):
         run(msgspec.structs.replace(SPEC, **change), tmp_path)
@@ -223,6 +235,10 @@ def test_a_burn_too_large_for_the_body_part_is_refused():
 
 
 def test_cli_refuses_out_of_range_views_with_exit_2(tmp_path):
-    r = subprocess.run([sys.executable, "-m", "gateway.cli", "phantom", "--out", str(tmp_path), "--views", "30"],
-                       capture_output=True, text=True, cwd=REPO)  # fmt: skip
+    r = subprocess.run(
+        [sys.executable, "-m", "gateway.cli", "phantom", "--out", str(tmp_path), "--views", "30"],
+        capture_output=True,
+        text=True,
+        cwd=REPO,
+    )
     assert r.returncode == 2 and "views" in r.stderr

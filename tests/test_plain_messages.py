@@ -23,15 +23,21 @@ FAKE_JPEG = b"\xff\xd8\xff\xe0" + b"\x13junk" * 500
 
 
 def _cli(*args: str) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "gateway.cli", *args], capture_output=True, text=True, cwd=REPO,
-                          timeout=120)  # fmt: skip
+    return subprocess.run(
+        [sys.executable, "-m", "gateway.cli", *args], capture_output=True, text=True, cwd=REPO, timeout=120
+    )
 
 
 @pytest.mark.parametrize(
     "name, data",
-    [("notes.jpg", NOT_AN_IMAGE), ("empty.jpg", b""), ("fake.png", FAKE_PNG), ("fake.jpg", FAKE_JPEG),
-     ("clip.mp4", NOT_AN_IMAGE)],
-)  # fmt: skip
+    [
+        ("notes.jpg", NOT_AN_IMAGE),
+        ("empty.jpg", b""),
+        ("fake.png", FAKE_PNG),
+        ("fake.jpg", FAKE_JPEG),
+        ("clip.mp4", NOT_AN_IMAGE),
+    ],
+)
 def test_the_gate_command_explains_unreadable_files_in_words(tmp_path, name, data):
     path = tmp_path / name
     path.write_bytes(data)

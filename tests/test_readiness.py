@@ -81,8 +81,14 @@ def _direction(tilt_deg: float, azimuth_deg: float) -> np.ndarray:
     return np.array([np.sin(a) * np.cos(b), np.sin(a) * np.sin(b), np.cos(a)])
 
 
-def _sighting(marker_id: int, tilt_deg: float, azimuth_deg: float = 0.0, distance_mm: float = 200.0,
-              noise_px: float = 0.0, seed: int = 0) -> MarkerSighting:  # fmt: skip
+def _sighting(
+    marker_id: int,
+    tilt_deg: float,
+    azimuth_deg: float = 0.0,
+    distance_mm: float = 200.0,
+    noise_px: float = 0.0,
+    seed: int = 0,
+) -> MarkerSighting:
     """The marker's corners seen by a camera at `distance_mm` from it, looking at it from that direction."""
     c = distance_mm * _direction(tilt_deg, azimuth_deg)
     z = -c / np.linalg.norm(c)
@@ -100,9 +106,18 @@ def _sighting(marker_id: int, tilt_deg: float, azimuth_deg: float = 0.0, distanc
 
 
 def _view(*sightings: MarkerSighting) -> View:
-    figures = QualityFigures(width=W, height=H, analysis_long_side=1000, sharpness=500.0, local_sharpness=500.0,
-                             mean_intensity=120.0, dark_fraction=0.0, bright_fraction=0.0, markers=list(sightings),
-                             seconds=0.01)  # fmt: skip
+    figures = QualityFigures(
+        width=W,
+        height=H,
+        analysis_long_side=1000,
+        sharpness=500.0,
+        local_sharpness=500.0,
+        mean_intensity=120.0,
+        dark_fraction=0.0,
+        bright_fraction=0.0,
+        markers=list(sightings),
+        seconds=0.01,
+    )
     return View(QualityVerdict(file="view.jpg", accepted=True, reasons=[], guidance=[], figures=figures))
 
 

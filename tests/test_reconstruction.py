@@ -134,8 +134,11 @@ def test_ruler_points_give_the_scale_when_there_is_no_marker(phantom, analysis, 
     out, report, _ = analysis
     ruler = _ruler(phantom, views=3)
     result = msgspec.json.decode(
-        scale.run(Config().reconstruction, unmarked / "sfm" / "model", unmarked / "images", unmarked / "scale",
-                  ruler).read_bytes(), type=scale.ScaleResult)  # fmt: skip
+        scale.run(
+            Config().reconstruction, unmarked / "sfm" / "model", unmarked / "images", unmarked / "scale", ruler
+        ).read_bytes(),
+        type=scale.ScaleResult,
+    )
     assert result.estimate.source is ScaleSource.ruler
     assert result.estimate.mm_per_unit == pytest.approx(report.scale.mm_per_unit, rel=0.01)
     assert result.estimate.relative_uncertainty < 0.02
@@ -145,8 +148,13 @@ def test_ruler_points_that_do_not_agree_are_refused(phantom, unmarked):
     ruler = _ruler(phantom, views=3)
     scrambled = [msgspec.structs.replace(m, a=[m.a[0] + 80 * i, m.a[1] - 60 * i]) for i, m in enumerate(ruler.marks)]
     with pytest.raises(CaptureInsufficient) as error:
-        scale.run(Config().reconstruction, unmarked / "sfm" / "model", unmarked / "images", unmarked / "scale",
-                  msgspec.structs.replace(ruler, marks=scrambled))  # fmt: skip
+        scale.run(
+            Config().reconstruction,
+            unmarked / "sfm" / "model",
+            unmarked / "images",
+            unmarked / "scale",
+            msgspec.structs.replace(ruler, marks=scrambled),
+        )
     assert error.value.code == FailureCode.bad_ruler and "same spot" in error.value.detail
 
 
@@ -174,8 +182,13 @@ def test_too_few_pictures_is_a_clear_failure_and_the_cli_says_so(phantom, tmp_pa
     for name in sorted(p.name for p in (phantom / "images").iterdir())[:3]:
         shutil.copy(phantom / "images" / name, few / name)
     before = _digest(few)
-    r = subprocess.run([sys.executable, "-m", "gateway.cli", "reconstruct", str(few), "--out", str(tmp_path / "out")],
-                       cwd=REPO, capture_output=True, text=True, timeout=120)  # fmt: skip
+    r = subprocess.run(
+        [sys.executable, "-m", "gateway.cli", "reconstruct", str(few), "--out", str(tmp_path / "out")],
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert r.returncode == 7, r.stderr
     report = msgspec.json.decode(r.stdout, type=ReconstructionReport)
     assert report.failure is FailureCode.too_few_views and "only 3 usable pictures" in report.reason
@@ -302,8 +315,13 @@ def test_adding_a_ruler_later_reruns_the_scale_and_what_follows(phantom, unmarke
 
 
 def test_fresh_refuses_to_delete_the_pictures(phantom, tmp_path):
-    r = subprocess.run([sys.executable, "-m", "gateway.cli", "reconstruct", str(phantom / "images"), "--out",
-                        str(phantom), "--fresh"], cwd=REPO, capture_output=True, text=True, timeout=60)  # fmt: skip
+    r = subprocess.run(
+        [sys.executable, "-m", "gateway.cli", "reconstruct", str(phantom / "images"), "--out", str(phantom), "--fresh"],
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
     assert r.returncode == 2 and "overlaps the pictures" in r.stderr
     assert len(list((phantom / "images").iterdir())) == 8
 

@@ -142,11 +142,14 @@ def _chart(encounter_id: str, entries: list[dict]) -> dict:
 
 def test_writing_the_burn_chart_stores_the_calculators_results_with_their_inputs(client, clin, encounter):
     eid = encounter["id"]
-    chart = _chart(eid, [
-        {"region": "trunk_anterior", "fraction": 1.0, "depth": "deep_partial"},
-        {"region": "thigh_right_anterior", "fraction": 1.0, "depth": "full_thickness"},
-        {"region": "neck_anterior", "fraction": 1.0, "depth": "superficial"},
-    ])  # fmt: skip
+    chart = _chart(
+        eid,
+        [
+            {"region": "trunk_anterior", "fraction": 1.0, "depth": "deep_partial"},
+            {"region": "thigh_right_anterior", "fraction": 1.0, "depth": "full_thickness"},
+            {"region": "neck_anterior", "fraction": 1.0, "depth": "superficial"},
+        ],
+    )
     r = client.put(f"/api/v1/encounters/{eid}/burn-chart", json=chart, headers={**clin, "If-None-Match": "*"})
     assert r.status_code == 201
     a = client.get(f"/api/v1/encounters/{eid}/assessment", headers=clin).json()["data"]
@@ -163,8 +166,13 @@ def test_writing_the_burn_chart_stores_the_calculators_results_with_their_inputs
 
 def test_fluid_given_lowers_the_rate_and_recompute_uses_it(client, clin, encounter):
     eid = encounter["id"]
-    chart = _chart(eid, [{"region": "trunk_anterior", "fraction": 1.0, "depth": "deep_partial"},
-                         {"region": "trunk_posterior", "fraction": 1.0, "depth": "deep_partial"}])  # fmt: skip
+    chart = _chart(
+        eid,
+        [
+            {"region": "trunk_anterior", "fraction": 1.0, "depth": "deep_partial"},
+            {"region": "trunk_posterior", "fraction": 1.0, "depth": "deep_partial"},
+        ],
+    )
     client.put(f"/api/v1/encounters/{eid}/burn-chart", json=chart, headers={**clin, "If-None-Match": "*"})
     given = {"encounter_id": eid, "fluid_given": [{"volume_ml": 1000, "given_at": now().isoformat()}]}
     r = client.put(f"/api/v1/encounters/{eid}/resuscitation", json=given, headers={**clin, "If-None-Match": "*"})
@@ -178,8 +186,13 @@ def test_fluid_given_lowers_the_rate_and_recompute_uses_it(client, clin, encount
 def test_an_impossible_chart_is_refused_and_nothing_is_written(client, clin, encounter, services):
     eid = encounter["id"]
     before = _count_versions(services)
-    chart = _chart(eid, [{"region": "trunk_anterior", "fraction": 0.7, "depth": "deep_partial"},
-                         {"region": "trunk_anterior", "fraction": 0.6, "depth": "full_thickness"}])  # fmt: skip
+    chart = _chart(
+        eid,
+        [
+            {"region": "trunk_anterior", "fraction": 0.7, "depth": "deep_partial"},
+            {"region": "trunk_anterior", "fraction": 0.6, "depth": "full_thickness"},
+        ],
+    )
     r = client.put(f"/api/v1/encounters/{eid}/burn-chart", json=chart, headers={**clin, "If-None-Match": "*"})
     assert r.status_code == 422
     assert "trunk_anterior" in r.json()["detail"]
@@ -199,8 +212,12 @@ def test_part_must_match_its_encounter_and_assessment_is_server_only(client, cli
 
 def test_full_record_returns_every_part(client, clin, encounter):
     eid = encounter["id"]
-    intake = {"encounter_id": eid, "history_of_present_illness": "scald from a kettle",
-              "medications": [{"name": "salbutamol"}], "tetanus_status": "up_to_date"}  # fmt: skip
+    intake = {
+        "encounter_id": eid,
+        "history_of_present_illness": "scald from a kettle",
+        "medications": [{"name": "salbutamol"}],
+        "tetanus_status": "up_to_date",
+    }
     client.put(f"/api/v1/encounters/{eid}/intake", json=intake, headers={**clin, "If-None-Match": "*"})
     mech = {"encounter_id": eid, "type": "scald", "agent": "boiling water", "duration_s": 3}
     client.put(f"/api/v1/encounters/{eid}/mechanism", json=mech, headers={**clin, "If-None-Match": "*"})
@@ -223,8 +240,11 @@ def test_withdrawing_a_part_recomputes_the_results_without_it(client, clin, enco
     eid = encounter["id"]
     _put_chart(client, clin, eid, TRUNK, **{"If-None-Match": "*"})
     assert client.get(f"/api/v1/encounters/{eid}/assessment", headers=clin).json()["data"]["tbsa"] is not None
-    r = client.delete(f"/api/v1/encounters/{eid}/burn-chart", params={"reason": "charted on the wrong patient"},
-                      headers={**clin, "If-Match": '"1"'})  # fmt: skip
+    r = client.delete(
+        f"/api/v1/encounters/{eid}/burn-chart",
+        params={"reason": "charted on the wrong patient"},
+        headers={**clin, "If-Match": '"1"'},
+    )
     assert r.status_code == 200
     a = client.get(f"/api/v1/encounters/{eid}/assessment", headers=clin).json()["data"]
     assert a["tbsa"] is None and a["fluids"] is None

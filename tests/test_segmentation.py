@@ -82,8 +82,16 @@ def test_a_tiny_training_run_exports_a_model_onnxruntime_can_run(tmp_path: Path)
         image[mask > 0] = (200, 40, 40)
         cv2.imwrite(str(data / "images" / f"{i:03d}.jpg"), image)
         cv2.imwrite(str(data / "masks" / f"{i:03d}.png"), mask)
-    conf = TrainingConfig(input_size=64, widths=[4, 8, 8, 8, 8], epochs=1, synthetic_scenes=0, synthetic_per_epoch=0,
-                          batch_size=4, validation_percent=25, threads=1)  # fmt: skip
+    conf = TrainingConfig(
+        input_size=64,
+        widths=[4, 8, 8, 8, 8],
+        epochs=1,
+        synthetic_scenes=0,
+        synthetic_per_epoch=0,
+        batch_size=4,
+        validation_percent=25,
+        threads=1,
+    )
     report = json.loads(run(conf, data, tmp_path / "out", tmp_path / "cache").read_text())
     assert report["epochs_run"] == 1 and report["real_validation"]["images"] >= 1
     prob = BurnSegmenter(tmp_path / "out" / report["model_file"]).probability(np.zeros((50, 70, 3), np.uint8))

@@ -41,6 +41,11 @@ def test_served_gateway_answers_over_loopback_and_keeps_data_across_restarts(gat
 def test_a_bad_config_is_a_clear_error(tmp_path):
     cfg = tmp_path / "bad.toml"
     cfg.write_text("[gateway]\nport = 'eighty'\n")
-    r = subprocess.run([sys.executable, "-m", "gateway.cli", "--config", str(cfg), "serve"], capture_output=True,
-                       text=True, cwd=REPO, timeout=60)  # fmt: skip
+    r = subprocess.run(
+        [sys.executable, "-m", "gateway.cli", "--config", str(cfg), "serve"],
+        capture_output=True,
+        text=True,
+        cwd=REPO,
+        timeout=60,
+    )
     assert r.returncode == 2 and "configuration is invalid" in r.stderr

@@ -122,8 +122,16 @@ def test_a_week_offline_then_200_mutations_pushed_three_times(client, auth, serv
         assert data["height_cm"] == 160.0
 
     # the phone merges each conflict onto the current version and pushes again
-    merged = [_m("patient", c["current"]["meta"]["id"], "update", {**c["current"]["data"], "height_cm": 160.0},
-                 base=c["current"]["meta"]["version"]) for c in conflicts]  # fmt: skip
+    merged = [
+        _m(
+            "patient",
+            c["current"]["meta"]["id"],
+            "update",
+            {**c["current"]["data"], "height_cm": 160.0},
+            base=c["current"]["meta"]["version"],
+        )
+        for c in conflicts
+    ]
     resolved = client.post("/api/v1/sync/push", json={"mutations": merged}, headers=phone).json()
     assert resolved["applied"] == 5
     for p in patients[:5]:
@@ -145,9 +153,13 @@ def test_push_rejects_bad_items_without_undoing_good_ones(client, auth, services
     bad_weight = patient_body(weight_kg=-1)
     orphan = encounter_body(uuid7())
     no_base = _m("patient", good["id"], "update", good)
-    queue = [_m("patient", good["id"], "create", good), _m("patient", bad_weight["id"], "create", bad_weight),
-             _m("encounter", orphan["id"], "create", orphan), no_base,
-             _m("assessment", good["id"], "create", {})]  # fmt: skip
+    queue = [
+        _m("patient", good["id"], "create", good),
+        _m("patient", bad_weight["id"], "create", bad_weight),
+        _m("encounter", orphan["id"], "create", orphan),
+        no_base,
+        _m("assessment", good["id"], "create", {}),
+    ]
     r = client.post("/api/v1/sync/push", json={"mutations": queue}, headers=phone).json()
     assert [x["status"] for x in r["results"]] == ["applied", "rejected", "rejected", "rejected", "rejected"]
     assert "weight_kg" in r["results"][1]["error"]

@@ -33,8 +33,11 @@ def test_each_round_anchors_the_head_and_a_cut_back_chain_is_refused_by_the_cent
     clinic.post("/api/v1/patients", patient_body(), "patient")
 
     # The clinic's chain is anchored at its head within a round or two (rounds run every 0.5 s here).
-    status = wait_for(lambda: (s := clinic.get("/api/v1/transfers/status", "status"))["audit_anchored_seq"] and s,
-                      30, "the first anchor")  # fmt: skip
+    status = wait_for(
+        lambda: (s := clinic.get("/api/v1/transfers/status", "status"))["audit_anchored_seq"] and s,
+        30,
+        "the first anchor",
+    )
     assert status["audit_anchor_problem"] is None
     anchor_file = sites.folder / "burnedge-keys" / ANCHOR_FILE
     assert anchor_file.exists()
@@ -57,8 +60,9 @@ def test_each_round_anchors_the_head_and_a_cut_back_chain_is_refused_by_the_cent
     anchor_file.unlink()
     sites.gateway.start()
     clinic = sites.clinic_client()
-    problem = wait_for(lambda: clinic.get("/api/v1/transfers/status", "status")["audit_anchor_problem"], 30,
-                       "the center's refusal")  # fmt: skip
+    problem = wait_for(
+        lambda: clinic.get("/api/v1/transfers/status", "status")["audit_anchor_problem"], 30, "the center's refusal"
+    )
     assert f"it had reached entry {anchored_seq}" in problem or f"entry {anchored_seq} is not the one" in problem
     assert _anchored(sites)[-1][0] == anchored_seq  # the center's anchor stayed where it was
     with sqlite3.connect(sites.center.env["BURNEDGE_CENTRAL_DATABASE"]) as db:
@@ -67,9 +71,23 @@ def test_each_round_anchors_the_head_and_a_cut_back_chain_is_refused_by_the_cent
     assert "refused to anchor" in sites.gateway.log.read_text()
 
     # It was a restore on purpose, say: the center's IT person accepts it and the restored chain is anchored afresh.
-    accepted = json.loads(cli("peers", "accept-restore", CLINIC, "--center", "--by", "it-person", "--reason",
-                              "restored from last night's backup", env=sites.center.env))  # fmt: skip
+    accepted = json.loads(
+        cli(
+            "peers",
+            "accept-restore",
+            CLINIC,
+            "--center",
+            "--by",
+            "it-person",
+            "--reason",
+            "restored from last night's backup",
+            env=sites.center.env,
+        )
+    )
     assert accepted["anchors_voided"] >= 2 and accepted["last_anchored_seq"] == anchored_seq
-    wait_for(lambda: clinic.get("/api/v1/transfers/status", "status")["audit_anchor_problem"] is None, 30,
-             "a fresh anchor after the accepted restore")  # fmt: skip
+    wait_for(
+        lambda: clinic.get("/api/v1/transfers/status", "status")["audit_anchor_problem"] is None,
+        30,
+        "a fresh anchor after the accepted restore",
+    )
     assert anchor_file.exists()

@@ -35,23 +35,39 @@ def test_case_arrives_intact_and_advice_comes_back(sites: Sites, tmp_path: Path)
     assert cases[0]["awaiting_advice"] and cases[0]["site_name"] == "Test field clinic"
     detail = center.get(f"/api/v1/cases/{cases[0]['site_id']}/{entry['bundle_id']}", "case")
     names = [p["name"] for p in detail["manifest"]["parts"]]
-    received = sorted(center.http.get(f"/api/v1/cases/{cases[0]['site_id']}/{entry['bundle_id']}/parts/{n}").content
-                      for n in names if n.startswith("photos/"))  # fmt: skip
+    received = sorted(
+        center.http.get(f"/api/v1/cases/{cases[0]['site_id']}/{entry['bundle_id']}/parts/{n}").content
+        for n in names
+        if n.startswith("photos/")
+    )
     assert received == sorted(p.read_bytes() for p in photos)  # byte-identical after decryption
     record = center.http.get(f"/api/v1/cases/{cases[0]['site_id']}/{entry['bundle_id']}/parts/record.json").json()
     assert record["encounter"]["meta"]["id"] == encounter_id
 
-    note = center.post(f"/api/v1/cases/{cases[0]['site_id']}/{entry['bundle_id']}/notes",
-                       {"recommendation": "manage_locally", "advice": "Dress with silver sulfadiazine; review in "
-                        "48 h with new photos."}, "note")  # fmt: skip
-    notes = wait_for(lambda: clinic.get(f"/api/v1/encounters/{encounter_id}/consultations", "notes"), 30,
-                     "the consultant's note at the clinic")  # fmt: skip
+    note = center.post(
+        f"/api/v1/cases/{cases[0]['site_id']}/{entry['bundle_id']}/notes",
+        {
+            "recommendation": "manage_locally",
+            "advice": "Dress with silver sulfadiazine; review in 48 h with new photos.",
+        },
+        "note",
+    )
+    notes = wait_for(
+        lambda: clinic.get(f"/api/v1/encounters/{encounter_id}/consultations", "notes"),
+        30,
+        "the consultant's note at the clinic",
+    )
     assert len(notes) == 1
     got = notes[0]["data"]["note"]
     assert got["note_id"] == note["note"]["note_id"] and got["consultant"] == "Dr Consultant"
     assert got["advice"].startswith("Dress with silver") and notes[0]["data"]["signed_by"] == "center-test"
-    wait_for(lambda: center.get(f"/api/v1/cases/{cases[0]['site_id']}/{entry['bundle_id']}", "case")["notes"][0]
-             ["delivered_at"], 30, "the clinic's acknowledgement of the note")  # fmt: skip
+    wait_for(
+        lambda: center.get(f"/api/v1/cases/{cases[0]['site_id']}/{entry['bundle_id']}", "case")["notes"][0][
+            "delivered_at"
+        ],
+        30,
+        "the clinic's acknowledgement of the note",
+    )
 
     # Nothing changed: no second version. Another photo: version 2 supersedes version 1, which stays readable.
     again = clinic.http.post(f"/api/v1/encounters/{encounter_id}/transfers")
@@ -104,8 +120,11 @@ def test_sigkill_of_either_side_mid_transfer_still_stores_each_bundle_once(tmp_p
             center = sites.center_client()
             for entry, photos in ((one, first_photos), (two, second_photos)):
                 detail = center.get(f"/api/v1/cases/clinic-test/{entry['bundle_id']}", "case")
-                got = sorted(center.http.get(f"/api/v1/cases/clinic-test/{entry['bundle_id']}/parts/{p['name']}")
-                             .content for p in detail["manifest"]["parts"] if p["name"].startswith("photos/"))  # fmt: skip
+                got = sorted(
+                    center.http.get(f"/api/v1/cases/clinic-test/{entry['bundle_id']}/parts/{p['name']}").content
+                    for p in detail["manifest"]["parts"]
+                    if p["name"].startswith("photos/")
+                )
                 assert got == sorted(p.read_bytes() for p in photos)
         finally:
             sites.stop()

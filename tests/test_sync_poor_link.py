@@ -73,8 +73,14 @@ def wait_ready(log: Path, proc: subprocess.Popen, needle: str, what: str, timeou
 def start_center_in(link: NetnsLink, sites: Sites) -> subprocess.Popen:
     env = {**os.environ, **FAST_HASH_ENV, **sites.center.env}
     with open(sites.center.log, "ab") as log:
-        proc = link.popen("center", [sys.executable, "-m", "gateway.cli", "central", "--site-id", CENTER, "--name",
-                                     "Test burn center"], cwd=REPO, env=env, stdout=log, stderr=subprocess.STDOUT)  # fmt: skip
+        proc = link.popen(
+            "center",
+            [sys.executable, "-m", "gateway.cli", "central", "--site-id", CENTER, "--name", "Test burn center"],
+            cwd=REPO,
+            env=env,
+            stdout=log,
+            stderr=subprocess.STDOUT,
+        )
     wait_ready(sites.center.log, proc, f"center {CENTER} listening on", "the center")
     return proc
 
@@ -83,9 +89,23 @@ def start_gateway_in(link: NetnsLink, sites: Sites) -> subprocess.Popen:
     env = {**os.environ, **FAST_HASH_ENV, **sites.gateway.env}
     with open(sites.gateway.log, "ab") as log:
         # Its HTTP API is on the namespace's own loopback, out of the host's reach: the test watches the outbox.
-        return link.popen("clinic", [sys.executable, "-m", "gateway.cli", "--db", str(sites.gateway.db), "serve",
-                                     "--port", str(sites.gateway.port)], cwd=REPO, env=env, stdout=log,
-                          stderr=subprocess.STDOUT)  # fmt: skip
+        return link.popen(
+            "clinic",
+            [
+                sys.executable,
+                "-m",
+                "gateway.cli",
+                "--db",
+                str(sites.gateway.db),
+                "serve",
+                "--port",
+                str(sites.gateway.port),
+            ],
+            cwd=REPO,
+            env=env,
+            stdout=log,
+            stderr=subprocess.STDOUT,
+        )
 
 
 @contextlib.contextmanager
@@ -136,17 +156,21 @@ def test_five_megabytes_over_256_kbit_with_three_cuts_arrive_once_and_intact(tmp
                         f"a site's process exited ({proc.returncode}); see {sites.gateway.log}, {sites.center.log}"
                     )
             if time.monotonic() > deadline:
-                pytest.fail(f"bundle {bundle_id} not delivered within {OVERALL_TIMEOUT_S:g} s over {RATE_KBIT} kbit/s: "
-                            f"{row['sent_chunks']}/{chunks} chunks acknowledged, {row['attempts']} failed attempts, "
-                            f"last error {row['last_error']!r}, cuts at {cuts}; see {sites.gateway.log} and "
-                            f"{sites.center.log}")  # fmt: skip
+                pytest.fail(
+                    f"bundle {bundle_id} not delivered within {OVERALL_TIMEOUT_S:g} s over {RATE_KBIT} kbit/s: "
+                    f"{row['sent_chunks']}/{chunks} chunks acknowledged, {row['attempts']} failed attempts, "
+                    f"last error {row['last_error']!r}, cuts at {cuts}; see {sites.gateway.log} and "
+                    f"{sites.center.log}"
+                )
             if len(cuts) < len(CUTS_AT) and row["sent_chunks"] >= CUTS_AT[len(cuts)] * chunks:
                 cuts.append((round(time.monotonic() - send_start, 1), row["sent_chunks"]))
                 link.flap(DOWN_S)
             time.sleep(0.2)
         took = time.monotonic() - send_start
-        print(f"delivered in {took:.0f} s (ideal {size * 8 / (RATE_KBIT * 1000):.0f} s), cuts (s, chunks acked) "
-              f"{cuts}, {row['attempts']} failed attempts; whole test {time.monotonic() - started:.0f} s")  # fmt: skip
+        print(
+            f"delivered in {took:.0f} s (ideal {size * 8 / (RATE_KBIT * 1000):.0f} s), cuts (s, chunks acked) "
+            f"{cuts}, {row['attempts']} failed attempts; whole test {time.monotonic() - started:.0f} s"
+        )
         assert len(cuts) == len(CUTS_AT), f"the transfer finished before all cuts: {cuts}"
         assert row["sent_chunks"] == chunks
 
@@ -158,6 +182,9 @@ def test_five_megabytes_over_256_kbit_with_three_cuts_arrive_once_and_intact(tmp
     manifest = json.loads(rows[0][0])
     assert manifest["encounter_id"] == encounter_id
     parts = tmp_path / "burnedge-central-store" / "parts"
-    received = sorted((parts / p["sha256"][:2] / p["sha256"]).read_bytes() for p in manifest["parts"]
-                      if p["name"].startswith("photos/"))  # fmt: skip
+    received = sorted(
+        (parts / p["sha256"][:2] / p["sha256"]).read_bytes()
+        for p in manifest["parts"]
+        if p["name"].startswith("photos/")
+    )
     assert received == sorted(p.read_bytes() for p in photos), "photos differ after the transfer"

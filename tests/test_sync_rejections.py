@@ -32,21 +32,49 @@ from sync.zenoh_link import Keys
 from tests.sync_sites import CENTER, CLINIC, Sites, cli
 
 pytestmark = pytest.mark.server
-SUMMARY = CaseSummary(urgency=Urgency.routine, urgency_reasons=[], encounter_mode="emergency", age_years=30.0,
-                      tbsa_percent=2.0, analyses=0, area_cm2=None, analysis_confidence=None)  # fmt: skip
+SUMMARY = CaseSummary(
+    urgency=Urgency.routine,
+    urgency_reasons=[],
+    encounter_mode="emergency",
+    age_years=30.0,
+    tbsa_percent=2.0,
+    analyses=0,
+    area_cm2=None,
+    analysis_confidence=None,
+)
 
 
 def make_bundle(keys: SiteKeys, center: SiteIdentity, encounter_id: str, version: int, chunk_size: int = 4096):
     bundle_id = str(uuid.uuid4())
-    parts = [bundle.PartData("record.json", json.dumps({"encounter": encounter_id}).encode()),
-             bundle.PartData("photos/a.jpg", bytes(range(256)) * 64)]  # fmt: skip
-    manifest = BundleManifest(bundle_id=bundle_id, site_id=keys.site_id, patient_id=str(uuid.uuid4()),
-                              encounter_id=encounter_id, version=version, supersedes=None, created_at="2026-11-22",
-                              created_by="clin", summary=SUMMARY, parts=[p.described for p in parts])  # fmt: skip
+    parts = [
+        bundle.PartData("record.json", json.dumps({"encounter": encounter_id}).encode()),
+        bundle.PartData("photos/a.jpg", bytes(range(256)) * 64),
+    ]
+    manifest = BundleManifest(
+        bundle_id=bundle_id,
+        site_id=keys.site_id,
+        patient_id=str(uuid.uuid4()),
+        encounter_id=encounter_id,
+        version=version,
+        supersedes=None,
+        created_at="2026-11-22",
+        created_by="clin",
+        summary=SUMMARY,
+        parts=[p.described for p in parts],
+    )
     sealed = seal(bundle.pack(manifest, parts), bytes.fromhex(center.box_key), bundle_id, chunk_size)
-    announcement = TransferManifest(protocol=PROTOCOL, bundle_id=bundle_id, site_id=keys.site_id, center_id=center.site_id,
-                                    encounter_id=encounter_id, version=version, created_at="2026-11-22",
-                                    sealed_key=sealed.sealed_key, plain_size=0, chunks=sealed.refs)  # fmt: skip
+    announcement = TransferManifest(
+        protocol=PROTOCOL,
+        bundle_id=bundle_id,
+        site_id=keys.site_id,
+        center_id=center.site_id,
+        encounter_id=encounter_id,
+        version=version,
+        created_at="2026-11-22",
+        sealed_key=sealed.sealed_key,
+        plain_size=0,
+        chunks=sealed.refs,
+    )
     return bundle_id, msgspec.msgpack.encode(keys.sign("manifest", announcement)), sealed
 
 
@@ -93,8 +121,12 @@ def test_every_bad_input_is_refused_and_nothing_partial_is_stored(tmp_path: Path
     center = msgspec.json.decode((tmp_path / "burnedge-central-keys" / "site.pub.json").read_bytes(), type=SiteIdentity)
     sites.center.start()
     conf = zenoh.Config()
-    for key, value in (("mode", "client"), ("connect/endpoints", [f"tcp/127.0.0.1:{sites.zenoh_port}"]),
-                       ("scouting/multicast/enabled", False), ("transport/shared_memory/enabled", False)):  # fmt: skip
+    for key, value in (
+        ("mode", "client"),
+        ("connect/endpoints", [f"tcp/127.0.0.1:{sites.zenoh_port}"]),
+        ("scouting/multicast/enabled", False),
+        ("transport/shared_memory/enabled", False),
+    ):
         conf.insert_json5(key, json.dumps(value))
     try:
         with zenoh.open(conf) as session:
@@ -147,8 +179,9 @@ def test_every_bad_input_is_refused_and_nothing_partial_is_stored(tmp_path: Path
             broken_id, broken_env, broken = make_bundle(keys, center, str(uuid.uuid4()), 1)
             other = make_bundle(keys, center, str(uuid.uuid4()), 1)[2]
             swapped_refs = [other.refs[0], *broken.refs[1:]]
-            announcement = msgspec.msgpack.decode(msgspec.msgpack.decode(broken_env, type=dict)["body"],
-                                                  type=TransferManifest)  # fmt: skip
+            announcement = msgspec.msgpack.decode(
+                msgspec.msgpack.decode(broken_env, type=dict)["body"], type=TransferManifest
+            )
             bad_env = msgspec.msgpack.encode(
                 keys.sign("manifest", msgspec.structs.replace(announcement, chunks=swapped_refs))
             )
@@ -164,6 +197,15 @@ def test_every_bad_input_is_refused_and_nothing_partial_is_stored(tmp_path: Path
         assert sorted(r[0] for r in db.execute("SELECT version FROM bundles")) == [1, 2]
         assert db.execute("SELECT COUNT(*) FROM incoming").fetchone()[0] == 0
         codes = {r[0] for r in db.execute("SELECT code FROM rejections")}
-        assert {"garbage", "bad-signature", "unknown-site", "revoked-site", "unannounced", "chunk-mismatch", "chunk-size", "replayed",
-                "chunk-forged"} <= codes  # fmt: skip
+        assert {
+            "garbage",
+            "bad-signature",
+            "unknown-site",
+            "revoked-site",
+            "unannounced",
+            "chunk-mismatch",
+            "chunk-size",
+            "replayed",
+            "chunk-forged",
+        } <= codes
     assert not any(p.is_file() for p in (tmp_path / "burnedge-central-store" / "incoming").rglob("*"))

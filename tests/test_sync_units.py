@@ -52,11 +52,18 @@ def test_the_container_checks_every_part_against_its_manifest():
     from schemas.transfer import BundleManifest
 
     parts = [bundle.PartData("record.json", b"{}"), bundle.PartData("photos/a.jpg", b"\xff\xd8 jpeg bytes")]
-    manifest = BundleManifest(bundle_id="0192f3b4-6a8e-7c3d-9b1a-2f4e5d6c7b8a", site_id="clinic-a",
-                              patient_id="0192f3b4-6a8e-7c3d-9b1a-2f4e5d6c7b8b",
-                              encounter_id="0192f3b4-6a8e-7c3d-9b1a-2f4e5d6c7b8c", version=1, supersedes=None,
-                              created_at="2026-11-22", created_by="clin", summary=SUMMARY,
-                              parts=[p.described for p in parts])  # fmt: skip
+    manifest = BundleManifest(
+        bundle_id="0192f3b4-6a8e-7c3d-9b1a-2f4e5d6c7b8a",
+        site_id="clinic-a",
+        patient_id="0192f3b4-6a8e-7c3d-9b1a-2f4e5d6c7b8b",
+        encounter_id="0192f3b4-6a8e-7c3d-9b1a-2f4e5d6c7b8c",
+        version=1,
+        supersedes=None,
+        created_at="2026-11-22",
+        created_by="clin",
+        summary=SUMMARY,
+        parts=[p.described for p in parts],
+    )
     packed = bundle.pack(manifest, parts)
     assert bundle.unpack(packed)[1] == {p.name: p.data for p in parts}
     with pytest.raises(TransferRejected) as altered:
@@ -65,8 +72,9 @@ def test_the_container_checks_every_part_against_its_manifest():
     with pytest.raises(TransferRejected) as extra:
         bundle.unpack(packed + b"more")
     assert extra.value.code == "bad-bundle"
-    evil = msgspec.structs.replace(manifest, parts=[msgspec.structs.replace(manifest.parts[0], name="../../etc/x"),
-                                                    manifest.parts[1]])  # fmt: skip
+    evil = msgspec.structs.replace(
+        manifest, parts=[msgspec.structs.replace(manifest.parts[0], name="../../etc/x"), manifest.parts[1]]
+    )
     with pytest.raises(TransferRejected, match="safe relative path"):
         bundle.unpack(bundle.pack(evil, [bundle.PartData("../../etc/x", b"{}"), parts[1]]))
 
@@ -86,8 +94,9 @@ def test_unfinished_transfers_are_dropped_after_the_stale_period(tmp_path: Path)
             ("0192f3b4-6a8e-7c3d-9b1a-000000000001", old),
             ("0192f3b4-6a8e-7c3d-9b1a-000000000002", dt.datetime.now(dt.UTC).isoformat()),
         ):
-            conn.execute("INSERT INTO incoming VALUES (?,?,?,?,?,?,?,?)",
-                         ("clinic-a", bundle_id, b"", "0" * 64, "e", 1, 1, at))  # fmt: skip
+            conn.execute(
+                "INSERT INTO incoming VALUES (?,?,?,?,?,?,?,?)", ("clinic-a", bundle_id, b"", "0" * 64, "e", 1, 1, at)
+            )
             (tmp_path / "store" / "incoming" / "clinic-a" / bundle_id).mkdir(parents=True)
     assert receiver.drop_stale(14) == 1
     left = [r[0] for r in db.connection().execute("SELECT bundle_id FROM incoming")]

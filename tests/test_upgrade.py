@@ -34,8 +34,12 @@ def snapshot(db: Path) -> Snapshot:
     conn = sqlite3.connect(f"file:{db}?mode=ro", uri=True)
     try:
         tables = [r[0] for r in conn.execute("SELECT name FROM sqlite_master WHERE type = 'table' ORDER BY name")]
-        out: Snapshot = {"sqlite_master": (["type", "name", "sql"], Counter(
-            conn.execute("SELECT type, name, sql FROM sqlite_master")))}  # fmt: skip
+        out: Snapshot = {
+            "sqlite_master": (
+                ["type", "name", "sql"],
+                Counter(conn.execute("SELECT type, name, sql FROM sqlite_master")),
+            )
+        }
         for table in tables:
             cursor = conn.execute(f'SELECT * FROM "{table}"')
             out[table] = ([d[0] for d in cursor.description], Counter(cursor.fetchall()))
@@ -65,8 +69,11 @@ def assert_kept(before: Snapshot, after: Snapshot) -> None:
 
 
 def file_hashes(root: Path) -> dict[str, str]:
-    return {str(p.relative_to(root)): hashlib.sha256(p.read_bytes()).hexdigest()
-            for p in sorted(root.rglob("*")) if p.is_file()}  # fmt: skip
+    return {
+        str(p.relative_to(root)): hashlib.sha256(p.read_bytes()).hexdigest()
+        for p in sorted(root.rglob("*"))
+        if p.is_file()
+    }
 
 
 def migrate(db_path: Path, migration_set) -> list[str]:
@@ -124,11 +131,17 @@ def test_a_gateway_made_before_sync_is_migrated_with_every_record_file_and_audit
     assert assets and rows(before, "analysis_jobs") and rows(before, "devices")
     blobs = db_path.parent / "burnedge-media" / "blobs"
     for asset in assets:
-        assert hashlib.sha256((blobs / asset["sha256"][:2] / asset["sha256"]).read_bytes()).hexdigest() == \
-            asset["sha256"]  # fmt: skip
+        assert (
+            hashlib.sha256((blobs / asset["sha256"][:2] / asset["sha256"]).read_bytes()).hexdigest() == asset["sha256"]
+        )
 
-    verified = subprocess.run([sys.executable, "-m", "gateway.cli", "--db", str(db_path), "audit", "verify"],
-                              capture_output=True, text=True, cwd=REPO, env={**FAST_HASH_ENV, "PATH": ""})  # fmt: skip
+    verified = subprocess.run(
+        [sys.executable, "-m", "gateway.cli", "--db", str(db_path), "audit", "verify"],
+        capture_output=True,
+        text=True,
+        cwd=REPO,
+        env={**FAST_HASH_ENV, "PATH": ""},
+    )
     assert verified.returncode == 0, verified.stdout + verified.stderr
     result = json.loads(verified.stdout)
     assert result["ok"] and result["entries"] == len(rows(before, "audit_log")), result
@@ -152,15 +165,21 @@ def test_a_gateway_made_before_sync_is_migrated_with_every_record_file_and_audit
         for v in versions:
             got = served[(v["kind"], v["id"], v["version"])]
             assert got["data"] == json.loads(v["data"]) and got["meta"]["seq"] == v["seq"]
-            assert (got["meta"]["deleted"], got["meta"]["delete_reason"], got["meta"]["updated_by"]) == \
-                (bool(v["deleted"]), v["delete_reason"], v["updated_by"])  # fmt: skip
+            assert (got["meta"]["deleted"], got["meta"]["delete_reason"], got["meta"]["updated_by"]) == (
+                bool(v["deleted"]),
+                v["delete_reason"],
+                v["updated_by"],
+            )
 
         # Each record as its own endpoint serves it: the head, and for patients and encounters every version.
         by_seq = {v["seq"]: v for v in versions}
         for h in heads:
             head, got = by_seq[h["seq"]], served_head(client, clin, h)
-            assert (got["meta"]["version"], got["meta"]["deleted"], got["data"]) == \
-                (head["version"], bool(head["deleted"]), json.loads(head["data"]))  # fmt: skip
+            assert (got["meta"]["version"], got["meta"]["deleted"], got["data"]) == (
+                head["version"],
+                bool(head["deleted"]),
+                json.loads(head["data"]),
+            )
             if h["kind"] in ("patient", "encounter"):
                 history = client.get(f"/api/v1/{h['kind']}s/{h['id']}/history", headers=clin).json()["versions"]
                 assert [x["meta"]["version"] for x in history] == sorted(

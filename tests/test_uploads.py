@@ -30,8 +30,15 @@ def enc(client, auth) -> str:
 
 
 def create(client, headers, enc: str, length: int, filename: str = "IMG_0001.JPG"):
-    return client.post("/api/v1/uploads", headers={**headers, **TUS, "Upload-Length": str(length),
-                                                    "Upload-Metadata": meta(encounter_id=enc, filename=filename)})  # fmt: skip
+    return client.post(
+        "/api/v1/uploads",
+        headers={
+            **headers,
+            **TUS,
+            "Upload-Length": str(length),
+            "Upload-Metadata": meta(encounter_id=enc, filename=filename),
+        },
+    )
 
 
 def send(client, headers, location: str, data: bytes, offset: int = 0, **extra):
@@ -101,7 +108,11 @@ def test_exif_capture_metadata_is_kept(client, auth, enc):
     loc, _ = upload(client, auth["clinician"], enc, jpeg_with_exif(scene()))
     m = client.get(loc, headers=auth["clinician"]).json()["asset"]["metadata"]
     assert (m["camera_make"], m["camera_model"], m["focal_length_mm"], m["focal_length_35mm"]) == (
-        "TestPhone Inc.", "Model 7", 4.25, 26.0)  # fmt: skip
+        "TestPhone Inc.",
+        "Model 7",
+        4.25,
+        26.0,
+    )
     assert m["orientation"] == 6 and m["captured_at"] == "2026:11:22 10:15:00"
 
 
@@ -289,8 +300,15 @@ def test_an_upload_belongs_to_its_sender_or_their_phone(client, auth, enc, servi
 
 def test_tus_client_variants_are_understood(client, auth, enc):
     h, data = auth["nurse"], jpeg(scene(seed=21))
-    r = client.post("/api/v1/uploads", headers={**h, **TUS, "Upload-Length": str(len(data)),
-                                                 "Upload-Metadata": meta(encounter_id=enc, fileName="IMG_7.JPG")})  # fmt: skip
+    r = client.post(
+        "/api/v1/uploads",
+        headers={
+            **h,
+            **TUS,
+            "Upload-Length": str(len(data)),
+            "Upload-Metadata": meta(encounter_id=enc, fileName="IMG_7.JPG"),
+        },
+    )
     loc = r.headers["location"]
     assert loc.startswith("http://") and loc.endswith(r.headers["location"].rsplit("/", 1)[1])
     # a client without PATCH sends POST with X-HTTP-Method-Override (tus-java-client does on old JREs)
@@ -307,8 +325,15 @@ def test_a_whole_file_checksum_in_the_metadata_is_checked(client, auth, enc, ser
     h, data = auth["nurse"], jpeg(scene(seed=22))
     good = hashlib.sha256(data).hexdigest()
     for checksum, status in ((f"sha256 {hashlib.sha256(b'other').hexdigest()}", 460), (f"sha256 {good}", 204)):
-        r = client.post("/api/v1/uploads", headers={**h, **TUS, "Upload-Length": str(len(data)),
-                                                     "Upload-Metadata": meta(encounter_id=enc, checksum=checksum)})  # fmt: skip
+        r = client.post(
+            "/api/v1/uploads",
+            headers={
+                **h,
+                **TUS,
+                "Upload-Length": str(len(data)),
+                "Upload-Metadata": meta(encounter_id=enc, checksum=checksum),
+            },
+        )
         assert send(client, h, r.headers["location"], data).status_code == status
     assert len([f for f in stored_files(services) if f.startswith("blobs/")]) == 1
 

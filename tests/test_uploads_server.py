@@ -43,9 +43,15 @@ def served(gateway_process):
 
 def _uploader(gw, headers, path: Path, encounter_id: str, storage: Path, chunk_size: int) -> Sha256Uploader:
     client = TusClient(gw.url + "/api/v1/uploads", headers=headers)
-    return Sha256Uploader(file_path=str(path), client=client, chunk_size=chunk_size, upload_checksum=True,
-                          metadata={"encounter_id": encounter_id, "filename": path.name}, store_url=True,
-                          url_storage=FileStorage(str(storage)))  # fmt: skip
+    return Sha256Uploader(
+        file_path=str(path),
+        client=client,
+        chunk_size=chunk_size,
+        upload_checksum=True,
+        metadata={"encounter_id": encounter_id, "filename": path.name},
+        store_url=True,
+        url_storage=FileStorage(str(storage)),
+    )
 
 
 def _asset(gw, headers, url: str) -> dict:
@@ -115,8 +121,9 @@ def test_a_500_mb_video_streams_to_disk_without_raising_memory(served, tmp_path)
     size = clip.stat().st_size
     tus = {"Tus-Resumable": "1.0.0"}
     meta = f"encounter_id {__import__('base64').b64encode(enc.encode()).decode()}"
-    loc = httpx.post(gw.url + "/api/v1/uploads", headers={**headers, **tus, "Upload-Length": str(size),
-                                                          "Upload-Metadata": meta}).headers["location"]  # fmt: skip
+    loc = httpx.post(
+        gw.url + "/api/v1/uploads", headers={**headers, **tus, "Upload-Length": str(size), "Upload-Metadata": meta}
+    ).headers["location"]
     patch = {**headers, **tus, "Content-Type": "application/offset+octet-stream"}
     before = _rss_kb(gw.proc.pid)
     peak = [before]
@@ -139,8 +146,10 @@ def test_a_500_mb_video_streams_to_disk_without_raising_memory(served, tmp_path)
     done.set()
     sampler.join()
     assert r.status_code == 204 and "burnedge-asset-id" in r.headers, r.text
-    print(f"gateway RSS {before / 1024:.1f} MB before; peak {streaming_peak / 1024:.1f} MB while streaming "
-          f"{streamed / MB:.0f} MB; {peak[0] / 1024:.1f} MB at completion (hash, video checks)")  # fmt: skip
+    print(
+        f"gateway RSS {before / 1024:.1f} MB before; peak {streaming_peak / 1024:.1f} MB while streaming "
+        f"{streamed / MB:.0f} MB; {peak[0] / 1024:.1f} MB at completion (hash, video checks)"
+    )
     assert (streaming_peak - before) / 1024 < 6, "streaming an upload must not hold it in memory"
     assert (peak[0] - before) / 1024 < 32
 
@@ -170,16 +179,25 @@ def test_a_stalled_patch_lets_go_of_the_upload_so_the_phone_can_resume(gateway_p
     data = jpeg(scene())
     tus = {"Tus-Resumable": "1.0.0"}
     meta = "encounter_id " + base64.b64encode(e["id"].encode()).decode()
-    loc = httpx.post(gw.url + "/api/v1/uploads", headers={**headers, **tus, "Upload-Length": str(len(data)),
-                                                           "Upload-Metadata": meta}).headers["location"]  # fmt: skip
+    loc = httpx.post(
+        gw.url + "/api/v1/uploads", headers={**headers, **tus, "Upload-Length": str(len(data)), "Upload-Metadata": meta}
+    ).headers["location"]
     path = "/" + loc.split("/", 3)[3]
     with socket.create_connection(("127.0.0.1", gw.port)) as raw:  # a phone that goes silent mid-request
-        raw.sendall((f"PATCH {path} HTTP/1.1\r\nHost: 127.0.0.1\r\nAuthorization: {headers['Authorization']}\r\n"
-                     f"Tus-Resumable: 1.0.0\r\nUpload-Offset: 0\r\nContent-Type: application/offset+octet-stream\r\n"
-                     f"Content-Length: {len(data)}\r\n\r\n").encode() + data[:5000])  # fmt: skip
+        raw.sendall(
+            (
+                f"PATCH {path} HTTP/1.1\r\nHost: 127.0.0.1\r\nAuthorization: {headers['Authorization']}\r\n"
+                f"Tus-Resumable: 1.0.0\r\nUpload-Offset: 0\r\nContent-Type: application/offset+octet-stream\r\n"
+                f"Content-Length: {len(data)}\r\n\r\n"
+            ).encode()
+            + data[:5000]
+        )
         time.sleep(2.5)
         offset = httpx.head(loc, headers={**headers, **tus}).headers["upload-offset"]
         assert offset == "5000"
-        r = httpx.patch(loc, content=data[5000:], headers={**headers, **tus, "Upload-Offset": "5000",
-                                                            "Content-Type": "application/offset+octet-stream"})  # fmt: skip
+        r = httpx.patch(
+            loc,
+            content=data[5000:],
+            headers={**headers, **tus, "Upload-Offset": "5000", "Content-Type": "application/offset+octet-stream"},
+        )
         assert r.status_code == 204 and r.headers["burnedge-accepted"] == "true"

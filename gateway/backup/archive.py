@@ -74,11 +74,19 @@ class ArchiveWriter:
 
 def safe_name(name: str) -> str:
     path = PurePosixPath(name)
-    if (name == MANIFEST or (not path.is_absolute() and ".." not in path.parts and len(path.parts) >= 2
-                             and path.parts[0] in TOP_FOLDERS and "\\" not in name and "\x00" not in name)):  # fmt: skip
+    if name == MANIFEST or (
+        not path.is_absolute()
+        and ".." not in path.parts
+        and len(path.parts) >= 2
+        and path.parts[0] in TOP_FOLDERS
+        and "\\" not in name
+        and "\x00" not in name
+    ):
         return name
-    raise InvalidInput(f"the backup names a file {name!r} outside the folders a backup holds: it was not made by "
-                       "burnedge; nothing was written")  # fmt: skip
+    raise InvalidInput(
+        f"the backup names a file {name!r} outside the folders a backup holds: it was not made by "
+        "burnedge; nothing was written"
+    )
 
 
 def members(source) -> Iterator[tuple[str, int, BinaryIO]]:

@@ -55,15 +55,18 @@ def fingerprint(public_key: bytes) -> str:
 
 def new_passphrase_key(passphrase: str, opslimit: int, memlimit: int) -> tuple[FileKey, BackupKdf]:
     if len(passphrase) < MIN_PASSPHRASE:
-        raise InvalidInput(f"the backup passphrase must have at least {MIN_PASSPHRASE} characters (a few words "
-                           "are easy to remember and hard to guess)")  # fmt: skip
+        raise InvalidInput(
+            f"the backup passphrase must have at least {MIN_PASSPHRASE} characters (a few words "
+            "are easy to remember and hard to guess)"
+        )
     kdf = BackupKdf(salt=nacl.utils.random(argon2id.SALTBYTES).hex(), opslimit=opslimit, memlimit=memlimit)
     return passphrase_key(passphrase, kdf), kdf
 
 
 def passphrase_key(passphrase: str, kdf: BackupKdf) -> FileKey:
-    key = argon2id.kdf(KEY_BYTES, passphrase.encode("utf-8"), bytes.fromhex(kdf.salt), opslimit=kdf.opslimit,
-                       memlimit=kdf.memlimit)  # fmt: skip
+    key = argon2id.kdf(
+        KEY_BYTES, passphrase.encode("utf-8"), bytes.fromhex(kdf.salt), opslimit=kdf.opslimit, memlimit=kdf.memlimit
+    )
     return FileKey(key)
 
 
@@ -79,13 +82,17 @@ def recipient_key(identity_file: Path, recipient: BackupRecipient) -> FileKey:
     private = load_identity(identity_file)
     mine = fingerprint(private.public_key.encode(RawEncoder))
     if mine != recipient.fingerprint:
-        raise AuthenticationFailed(f"this backup is encrypted to recipient key {recipient.fingerprint}, but "
-                                   f"{identity_file} is key {mine}: use the private key made with that one")  # fmt: skip
+        raise AuthenticationFailed(
+            f"this backup is encrypted to recipient key {recipient.fingerprint}, but "
+            f"{identity_file} is key {mine}: use the private key made with that one"
+        )
     try:
         return FileKey(SealedBox(private).decrypt(bytes.fromhex(recipient.sealed_key)))
     except nacl.exceptions.CryptoError as exc:
-        raise InvalidInput("the backup's sealed file key does not open with the right private key: the file's "
-                           "header is damaged; use another copy") from exc  # fmt: skip
+        raise InvalidInput(
+            "the backup's sealed file key does not open with the right private key: the file's "
+            "header is damaged; use another copy"
+        ) from exc
 
 
 def keygen(folder: Path) -> tuple[Path, Path, str]:
@@ -94,13 +101,15 @@ def keygen(folder: Path) -> tuple[Path, Path, str]:
     public_path, private_path = folder / PUBLIC_FILE, folder / PRIVATE_FILE
     for path in (public_path, private_path):
         if path.exists():
-            raise InvalidInput(f"{path} already exists: keep it (older backups need its private half) or use "
-                               "another folder")  # fmt: skip
+            raise InvalidInput(
+                f"{path} already exists: keep it (older backups need its private half) or use another folder"
+            )
     key = PrivateKey.generate()
     raw = key.public_key.encode(RawEncoder)
     print_ = fingerprint(raw)
-    private = _RecipientPrivate(kind="burnedge-backup-identity", private_key=key.encode(HexEncoder).decode(),
-                                fingerprint=print_)  # fmt: skip
+    private = _RecipientPrivate(
+        kind="burnedge-backup-identity", private_key=key.encode(HexEncoder).decode(), fingerprint=print_
+    )
     fd = os.open(private_path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
     with os.fdopen(fd, "wb") as handle:
         handle.write(msgspec.json.encode(private) + b"\n")

@@ -96,8 +96,9 @@ def restore(path: Path, into: Path, unlock: Callable[[BackupHeader], FileKey], *
                     stream.read()
                     continue
                 result.files += 1
-                result.bytes += _write(staging / _target(name, manifest.database, database_name), stream,
-                                       expected.get(name), path)  # fmt: skip
+                result.bytes += _write(
+                    staging / _target(name, manifest.database, database_name), stream, expected.get(name), path
+                )
             reader.drain()
         _check_database(staging / database_name, manifest)
         (staging / CONFIG_FILE).write_text(render(manifest.settings, into, database_name, manifest.created_at))
@@ -115,8 +116,10 @@ def _refuse_non_empty(into: Path, force: bool) -> None:
     if into.exists() and not into.is_dir():
         raise InvalidInput(f"{into} is a file, not a folder: restore into a new folder")
     if not force and into.is_dir() and any(into.iterdir()):
-        raise Conflict(f"{into} is not empty: restore into a new folder, or add --force to restore into it anyway "
-                       "(what has the same name as the restored state is replaced; stop any gateway using it)")  # fmt: skip
+        raise Conflict(
+            f"{into} is not empty: restore into a new folder, or add --force to restore into it anyway "
+            "(what has the same name as the restored state is replaced; stop any gateway using it)"
+        )
 
 
 def _target(name: str, database: str, database_name: str) -> str:
@@ -156,8 +159,9 @@ def _check_database(database: Path, manifest: BackupManifest) -> None:
     if result != "ok":
         raise InvalidInput(f"the backed-up database fails SQLite's integrity check ({result}); use another copy")
     if head != manifest.audit_head:
-        raise InvalidInput("the backed-up database's last audit entry is not the one its manifest names; "
-                           "use another copy")  # fmt: skip
+        raise InvalidInput(
+            "the backed-up database's last audit entry is not the one its manifest names; use another copy"
+        )
 
 
 def _move_into_place(staging: Path, into: Path, result: Restored) -> None:

@@ -5,8 +5,12 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-FOLDERS = {"media": "burnedge-media", "analyses": "burnedge-analyses", "outbox": "burnedge-outbox",
-           "keys": "burnedge-keys"}  # fmt: skip
+FOLDERS = {
+    "media": "burnedge-media",
+    "analyses": "burnedge-analyses",
+    "outbox": "burnedge-outbox",
+    "keys": "burnedge-keys",
+}
 """Top folder in the archive -> folder in the restore target (the default names beside the database)."""
 
 

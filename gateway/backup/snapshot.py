@@ -47,8 +47,13 @@ class StateLayout:
 
     @classmethod
     def of(cls, config: Config) -> StateLayout:
-        return cls(database=Path(config.gateway.database), media=media_root(config), analyses=work_root(config),
-                   outbox=outbox_root(config), keys=keys_dir(config))  # fmt: skip
+        return cls(
+            database=Path(config.gateway.database),
+            media=media_root(config),
+            analyses=work_root(config),
+            outbox=outbox_root(config),
+            keys=keys_dir(config),
+        )
 
 
 @dataclass
@@ -133,11 +138,17 @@ def _refer(conn: sqlite3.Connection, copy: Path, layout: StateLayout, keys: dict
     def rows(sql: str, table: str) -> list[sqlite3.Row]:
         return conn.execute(sql).fetchall() if table in tables else []
 
-    migrations = [r["name"] for r in rows("SELECT name FROM _sqlite_migrations WHERE migration_set = 'burnedge'"
-                                          " ORDER BY id", "_sqlite_migrations")]  # fmt: skip
+    migrations = [
+        r["name"]
+        for r in rows(
+            "SELECT name FROM _sqlite_migrations WHERE migration_set = 'burnedge' ORDER BY id", "_sqlite_migrations"
+        )
+    ]
     head = audit.head(conn) if "audit_log" in tables else None
-    blobs = [(f"media/blobs/{sha[:2]}/{sha}", layout.media / "blobs" / sha[:2] / sha, sha)
-             for (sha,) in rows("SELECT DISTINCT sha256 FROM assets ORDER BY sha256", "assets")]  # fmt: skip
+    blobs = [
+        (f"media/blobs/{sha[:2]}/{sha}", layout.media / "blobs" / sha[:2] / sha, sha)
+        for (sha,) in rows("SELECT DISTINCT sha256 FROM assets ORDER BY sha256", "assets")
+    ]
     files: list[tuple[str, Path]] = []
     done = rows("SELECT id, patient_id FROM analysis_jobs WHERE state = 'done' ORDER BY id", "analysis_jobs")
     for row in done:
@@ -146,18 +157,27 @@ def _refer(conn: sqlite3.Connection, copy: Path, layout: StateLayout, keys: dict
         track = layout.analyses / "patients" / patient / "track.json"
         if track.is_file():  # the per-visit registrations beside it are a cache, rebuilt on the next analysis
             files.append((f"analyses/patients/{patient}/track.json", track))
-    outbox = [(f"outbox/{r['bundle_id']}/{i:06d}.chunk", layout.outbox / r["bundle_id"] / f"{i:06d}.chunk")
-              for r in rows("SELECT bundle_id, chunks FROM outbox WHERE state = 'queued' ORDER BY bundle_id", "outbox")
-              for i in range(r["chunks"])]  # fmt: skip
+    outbox = [
+        (f"outbox/{r['bundle_id']}/{i:06d}.chunk", layout.outbox / r["bundle_id"] / f"{i:06d}.chunk")
+        for r in rows("SELECT bundle_id, chunks FROM outbox WHERE state = 'queued' ORDER BY bundle_id", "outbox")
+        for i in range(r["chunks"])
+    ]
     site_id = None
     if PUBLIC_FILE in keys:
         try:
             site_id = json.loads(keys[PUBLIC_FILE]).get("site_id")
         except (ValueError, AttributeError):
             site_id = None
-    return Snapshot(database=copy, audit_head=head,
-                    migrations=migrations, site_id=site_id, keys=keys, blobs=blobs, files=files,
-                    outbox=outbox)  # fmt: skip
+    return Snapshot(
+        database=copy,
+        audit_head=head,
+        migrations=migrations,
+        site_id=site_id,
+        keys=keys,
+        blobs=blobs,
+        files=files,
+        outbox=outbox,
+    )
 
 
 def _analysis_files(folder: Path, prefix: str) -> list[tuple[str, Path]]:

@@ -101,8 +101,10 @@ class DecryptingReader:
 
     def __init__(self, handle: BinaryIO, header: BackupHeader, header_raw: bytes, key: FileKey, name: str):
         if not hmac.compare_digest(key.check_value(), header.key_check):
-            raise AuthenticationFailed(f"{name}: wrong passphrase or key; nothing was written. The backup opens "
-                                       "only with the passphrase (or recipient key) it was made with")  # fmt: skip
+            raise AuthenticationFailed(
+                f"{name}: wrong passphrase or key; nothing was written. The backup opens "
+                "only with the passphrase (or recipient key) it was made with"
+            )
         self.handle, self.name, self.header = handle, name, header
         self.state = crypto_secretstream_xchacha20poly1305_state()
         crypto_secretstream_xchacha20poly1305_init_pull(self.state, bytes.fromhex(header.stream_header), key.key)
@@ -116,14 +118,18 @@ class DecryptingReader:
         offset = self.handle.tell()
         sealed = self.handle.read(self.header.chunk_bytes + ABYTES)
         if not sealed:
-            raise InvalidInput(f"{self.name} is cut short: it ends after {self.chunks} chunks ({offset} bytes) without "
-                               "the final one (a copy interrupted?); nothing was written. Use another copy")  # fmt: skip
+            raise InvalidInput(
+                f"{self.name} is cut short: it ends after {self.chunks} chunks ({offset} bytes) without "
+                "the final one (a copy interrupted?); nothing was written. Use another copy"
+            )
         try:
             plain, tag = crypto_secretstream_xchacha20poly1305_pull(self.state, sealed, self.ad)
         except nacl.exceptions.CryptoError as exc:
-            raise InvalidInput(f"{self.name} is damaged or was altered: chunk {self.chunks + 1} at byte {offset} "
-                               "does not authenticate (or the file is cut short there); nothing was written. "
-                               "Use another copy") from exc  # fmt: skip
+            raise InvalidInput(
+                f"{self.name} is damaged or was altered: chunk {self.chunks + 1} at byte {offset} "
+                "does not authenticate (or the file is cut short there); nothing was written. "
+                "Use another copy"
+            ) from exc
         self.ad = None
         self.chunks += 1
         if tag == TAG_FINAL:

@@ -61,10 +61,15 @@ def write_backup(config: Config, target: Path, encryption: Encryption) -> Backup
 
 def _archive(config: Config, snap: snapshot.Snapshot, out, encryption: Encryption) -> BackupManifest:
     state, stream_header = new_stream(encryption.key)
-    header = BackupHeader(mode="recipient" if encryption.recipient else "passphrase", kdf=encryption.kdf,
-                          recipient=encryption.recipient, key_check=encryption.key.check_value(),
-                          stream_header=stream_header.hex(), chunk_bytes=config.backup.chunk_kib * 1024,
-                          created_at=iso(utcnow()))  # fmt: skip
+    header = BackupHeader(
+        mode="recipient" if encryption.recipient else "passphrase",
+        kdf=encryption.kdf,
+        recipient=encryption.recipient,
+        key_check=encryption.key.check_value(),
+        stream_header=stream_header.hex(),
+        chunk_bytes=config.backup.chunk_kib * 1024,
+        created_at=iso(utcnow()),
+    )
     archive = ArchiveWriter(EncryptingWriter(out, header, state))
     skipped: list[str] = []
     database = f"database/{snap.database.name}"
@@ -79,13 +84,26 @@ def _archive(config: Config, snap: snapshot.Snapshot, out, encryption: Encryptio
     for name, path in snap.files:
         _add_if_present(archive, name, path, skipped, "removed while copying")
     for name, path in snap.outbox:
-        _add_if_present(archive, name, path, skipped, "delivered while copying: queue the encounter again after "
-                        "a restore (`burnedge sync send`)")  # fmt: skip
+        _add_if_present(
+            archive,
+            name,
+            path,
+            skipped,
+            "delivered while copying: queue the encounter again after a restore (`burnedge sync send`)",
+        )
     for name, data in snap.keys.items():
         archive.add_bytes(f"keys/{name}", data)
-    manifest = BackupManifest(burnedge_version=__version__, created_at=iso(utcnow()), site_id=snap.site_id,
-                              schema_migrations=snap.migrations, audit_head=snap.audit_head, database=database,
-                              files=list(archive.files), settings=settings_of(config), skipped=skipped)  # fmt: skip
+    manifest = BackupManifest(
+        burnedge_version=__version__,
+        created_at=iso(utcnow()),
+        site_id=snap.site_id,
+        schema_migrations=snap.migrations,
+        audit_head=snap.audit_head,
+        database=database,
+        files=list(archive.files),
+        settings=settings_of(config),
+        skipped=skipped,
+    )
     archive.finish(manifest)
     for line in skipped:
         log.warning("backup: %s", line)
@@ -99,8 +117,14 @@ def _add_if_present(archive: ArchiveWriter, name: str, path: Path, skipped: list
         skipped.append(f"{name}: {why}")
 
 
-PATH_SETTINGS = {("gateway", "database"), ("uploads", "data_dir"), ("jobs", "work_dir"), ("sync", "keys_dir"),
-                 ("sync", "outbox_dir"), ("backup", "folder")}  # fmt: skip
+PATH_SETTINGS = {
+    ("gateway", "database"),
+    ("uploads", "data_dir"),
+    ("jobs", "work_dir"),
+    ("sync", "keys_dir"),
+    ("sync", "outbox_dir"),
+    ("backup", "folder"),
+}
 """Where the restored state lies is set by the restore, not carried over; nor is the backup folder, so that a
 restore drill never rotates away the real gateway's backups."""
 

@@ -15,17 +15,26 @@ class AssetController(Controller):
     path = "/api/v1"
     tags = ["assets"]
 
-    @get("/assets/{asset_id:str}", sync_to_thread=False, summary="A stored photo, video or frame, with its verdict",
-         responses=problems(*ONE))  # fmt: skip
+    @get(
+        "/assets/{asset_id:str}",
+        sync_to_thread=False,
+        summary="A stored photo, video or frame, with its verdict",
+        responses=problems(*ONE),
+    )
     def read(self, asset_id: IdPath, request: AuthedRequest, services: ServicesDep) -> Asset:
         return services.assets.get(request.user, asset_id)
 
-    @get("/assets/{asset_id:str}/file", sync_to_thread=True, summary="The original bytes, exactly as uploaded",
-         responses=problems(*ONE))  # fmt: skip
+    @get(
+        "/assets/{asset_id:str}/file",
+        sync_to_thread=True,
+        summary="The original bytes, exactly as uploaded",
+        responses=problems(*ONE),
+    )
     def download(self, asset_id: IdPath, request: AuthedRequest, services: ServicesDep) -> File:
         asset, path = services.assets.file(request.user, asset_id)
-        return File(path=path, filename=asset.filename, media_type=asset.media_type.value,
-                    headers={"ETag": f'"{asset.sha256}"'})  # fmt: skip
+        return File(
+            path=path, filename=asset.filename, media_type=asset.media_type.value, headers={"ETag": f'"{asset.sha256}"'}
+        )
 
     @get(
         "/encounters/{encounter_id:str}/assets",
@@ -37,8 +46,11 @@ class AssetController(Controller):
         return services.assets.for_encounter(request.user, encounter_id)
 
     # 422: the encounter was withdrawn (no pictures can be added to it, nor analysed).
-    @get("/encounters/{encounter_id:str}/capture-readiness", sync_to_thread=True,
-         summary="Is the capture set ready for 3D analysis, and what is missing",
-         responses=problems(*ONE, 422))  # fmt: skip
+    @get(
+        "/encounters/{encounter_id:str}/capture-readiness",
+        sync_to_thread=True,
+        summary="Is the capture set ready for 3D analysis, and what is missing",
+        responses=problems(*ONE, 422),
+    )
     def readiness(self, encounter_id: IdPath, request: AuthedRequest, services: ServicesDep) -> CaptureReadiness:
         return services.assets.readiness(request.user, encounter_id)

@@ -16,11 +16,23 @@ from schemas.records import Record
 from schemas.transfer import SITE_ID_PATTERN
 
 # The document shows each pattern in its ECMA-262 form (gateway/openapi.py); validation uses the Python one.
-IdPath = Annotated[str, PathParameter(pattern=ID_PATTERN, description="A UUID in canonical lower-case form.",
-                                      schema_extra={"pattern": ecma_pattern(ID_PATTERN)})]  # fmt: skip
+IdPath = Annotated[
+    str,
+    PathParameter(
+        pattern=ID_PATTERN,
+        description="A UUID in canonical lower-case form.",
+        schema_extra={"pattern": ecma_pattern(ID_PATTERN)},
+    ),
+]
 """An identifier in a path, matched whole: a malformed one is a 400, never a lookup of a different id."""
-SiteIdPath = Annotated[str, PathParameter(pattern=SITE_ID_PATTERN, description="A site's name on the wire.",
-                                          schema_extra={"pattern": ecma_pattern(SITE_ID_PATTERN)})]  # fmt: skip
+SiteIdPath = Annotated[
+    str,
+    PathParameter(
+        pattern=SITE_ID_PATTERN,
+        description="A site's name on the wire.",
+        schema_extra={"pattern": ecma_pattern(SITE_ID_PATTERN)},
+    ),
+]
 
 _ETAG = re.compile(r'^\s*(?:W/)?"?(\d+)"?\s*$')
 

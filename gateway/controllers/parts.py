@@ -52,10 +52,21 @@ def writable_part_controller(slug: str, kind: RecordKind, struct: type) -> type[
     label = kind.label
     read, history = _readers(kind, label)
 
-    @put("/", sync_to_thread=True, summary=f"Create (If-None-Match: *) or update (If-Match) the {label}",
-         responses={**UPDATE, 201: ResponseSpec(Record, description=f"The {label} was created")})  # fmt: skip
-    def write(self, encounter_id: IdPath, data: JSONBody[struct], request: AuthedRequest, services: ServicesDep,
-              if_match: IfMatch = None, if_none_match: IfNoneMatch = None) -> Response[Record]:  # fmt: skip
+    @put(
+        "/",
+        sync_to_thread=True,
+        summary=f"Create (If-None-Match: *) or update (If-Match) the {label}",
+        responses={**UPDATE, 201: ResponseSpec(Record, description=f"The {label} was created")},
+    )
+    def write(
+        self,
+        encounter_id: IdPath,
+        data: JSONBody[struct],
+        request: AuthedRequest,
+        services: ServicesDep,
+        if_match: IfMatch = None,
+        if_none_match: IfNoneMatch = None,
+    ) -> Response[Record]:
         if if_match is None and if_none_match is not None:
             if if_none_match.strip() != "*":
                 raise InvalidInput('If-None-Match must be "*" (create only if absent)')
@@ -68,27 +79,48 @@ def writable_part_controller(slug: str, kind: RecordKind, struct: type) -> type[
         return outcome_response(services.records.update(request.user, kind, encounter_id, data, version))
 
     @delete("/", sync_to_thread=True, status_code=200, summary=f"Withdraw the {label}", responses=WITHDRAW)
-    def withdraw(self, encounter_id: IdPath, request: AuthedRequest, services: ServicesDep, reason: Reason,
-                 if_match: IfMatch = None) -> Response[Record]:  # fmt: skip
+    def withdraw(
+        self,
+        encounter_id: IdPath,
+        request: AuthedRequest,
+        services: ServicesDep,
+        reason: Reason,
+        if_match: IfMatch = None,
+    ) -> Response[Record]:
         version = parse_version(if_match, action=f"withdrawing the {label}")
         return outcome_response(services.records.delete(request.user, kind, encounter_id, version, reason))
 
-    attrs = {"path": f"/api/v1/encounters/{{encounter_id:str}}/{slug}", "tags": ["encounter record"],
-             "read": read, "history": history, "write": write, "withdraw": withdraw}  # fmt: skip
+    attrs = {
+        "path": f"/api/v1/encounters/{{encounter_id:str}}/{slug}",
+        "tags": ["encounter record"],
+        "read": read,
+        "history": history,
+        "write": write,
+        "withdraw": withdraw,
+    }
     return type(f"{struct.__name__}Controller", (Controller,), attrs)
 
 
 def assessment_controller() -> type[Controller]:
     read, history = _readers(RecordKind.assessment, "calculator results (%TBSA, fluids, referral)")
 
-    @post("/", sync_to_thread=True, status_code=200,
-          summary="Recompute %TBSA, fluids and referral as of now (e.g. after more fluid was given)",
-          responses=problems(*ONE, 409))  # fmt: skip
+    @post(
+        "/",
+        sync_to_thread=True,
+        status_code=200,
+        summary="Recompute %TBSA, fluids and referral as of now (e.g. after more fluid was given)",
+        responses=problems(*ONE, 409),
+    )
     def recompute(self, encounter_id: IdPath, request: AuthedRequest, services: ServicesDep) -> Response[Record]:
         return record_response(services.records.recompute_assessment(request.user, encounter_id))
 
-    attrs = {"path": "/api/v1/encounters/{encounter_id:str}/assessment", "tags": ["encounter record"],
-             "read": read, "history": history, "recompute": recompute}  # fmt: skip
+    attrs = {
+        "path": "/api/v1/encounters/{encounter_id:str}/assessment",
+        "tags": ["encounter record"],
+        "read": read,
+        "history": history,
+        "recompute": recompute,
+    }
     return type("AssessmentController", (Controller,), attrs)
 
 

@@ -29,57 +29,98 @@ class PatientController(Controller):
     path = "/api/v1/patients"
     tags = ["patients"]
 
-    @post("/", sync_to_thread=True, summary="Create a patient (the phone makes the id; retrying is safe)",
-          responses={**REPLAYED, **problems(*BODY, *SESSION, 409, 422)})  # fmt: skip
+    @post(
+        "/",
+        sync_to_thread=True,
+        summary="Create a patient (the phone makes the id; retrying is safe)",
+        responses={**REPLAYED, **problems(*BODY, *SESSION, 409, 422)},
+    )
     def create(self, data: JSONBody[Patient], request: AuthedRequest, services: ServicesDep) -> Response[Record]:
         return outcome_response(services.records.create(request.user, RecordKind.patient, data.id, data))
 
     @get("/", sync_to_thread=False, summary="List patients", responses=problems(400, *SESSION))
     def list_(
-        self, request: AuthedRequest, services: ServicesDep, include_deleted: FromQuery[bool] = False,
-        limit: Limit = 100, offset: Offset = 0,
-    ) -> list[Record]:  # fmt: skip
-        return services.records.list_records(request.user, RecordKind.patient, include_deleted=include_deleted,
-                                     limit=limit, offset=offset)  # fmt: skip
+        self,
+        request: AuthedRequest,
+        services: ServicesDep,
+        include_deleted: FromQuery[bool] = False,
+        limit: Limit = 100,
+        offset: Offset = 0,
+    ) -> list[Record]:
+        return services.records.list_records(
+            request.user, RecordKind.patient, include_deleted=include_deleted, limit=limit, offset=offset
+        )
 
     @get("/{patient_id:str}", sync_to_thread=False, summary="Read a patient", responses=problems(*ONE))
     def read(self, patient_id: IdPath, request: AuthedRequest, services: ServicesDep) -> Response[Record]:
         return record_response(services.records.get(request.user, RecordKind.patient, patient_id))
 
     @put("/{patient_id:str}", sync_to_thread=True, summary="Update a patient (If-Match required)", responses=UPDATE)
-    def update(self, patient_id: IdPath, data: JSONBody[Patient], request: AuthedRequest, services: ServicesDep,
-               if_match: IfMatch = None) -> Response[Record]:  # fmt: skip
+    def update(
+        self,
+        patient_id: IdPath,
+        data: JSONBody[Patient],
+        request: AuthedRequest,
+        services: ServicesDep,
+        if_match: IfMatch = None,
+    ) -> Response[Record]:
         version = parse_version(if_match, action="updating a patient")
         return outcome_response(services.records.update(request.user, RecordKind.patient, patient_id, data, version))
 
-    @delete("/{patient_id:str}", sync_to_thread=True, status_code=200, summary="Withdraw a patient (kept in history)",
-            responses=WITHDRAW)  # fmt: skip
-    def withdraw(self, patient_id: IdPath, request: AuthedRequest, services: ServicesDep, reason: Reason,
-                 if_match: IfMatch = None) -> Response[Record]:  # fmt: skip
+    @delete(
+        "/{patient_id:str}",
+        sync_to_thread=True,
+        status_code=200,
+        summary="Withdraw a patient (kept in history)",
+        responses=WITHDRAW,
+    )
+    def withdraw(
+        self,
+        patient_id: IdPath,
+        request: AuthedRequest,
+        services: ServicesDep,
+        reason: Reason,
+        if_match: IfMatch = None,
+    ) -> Response[Record]:
         version = parse_version(if_match, action="withdrawing a patient")
         return outcome_response(services.records.delete(request.user, RecordKind.patient, patient_id, version, reason))
 
-    @get("/{patient_id:str}/history", sync_to_thread=False, summary="Every version of a patient",
-         responses=problems(*ONE))  # fmt: skip
+    @get(
+        "/{patient_id:str}/history",
+        sync_to_thread=False,
+        summary="Every version of a patient",
+        responses=problems(*ONE),
+    )
     def history(self, patient_id: IdPath, request: AuthedRequest, services: ServicesDep) -> RecordHistory:
         versions = services.records.history(request.user, RecordKind.patient, patient_id)
         return RecordHistory(kind=RecordKind.patient, id=patient_id, versions=versions)
 
-    @get("/{patient_id:str}/encounters", sync_to_thread=False, summary="A patient's encounters",
-         responses=problems(*ONE))  # fmt: skip
-    def encounters(self, patient_id: IdPath, request: AuthedRequest, services: ServicesDep,
-                   include_deleted: FromQuery[bool] = False) -> list[Record]:  # fmt: skip
+    @get(
+        "/{patient_id:str}/encounters", sync_to_thread=False, summary="A patient's encounters", responses=problems(*ONE)
+    )
+    def encounters(
+        self,
+        patient_id: IdPath,
+        request: AuthedRequest,
+        services: ServicesDep,
+        include_deleted: FromQuery[bool] = False,
+    ) -> list[Record]:
         services.records.get(request.user, RecordKind.patient, patient_id)
-        return services.records.list_records(request.user, RecordKind.encounter, parent_id=patient_id,
-                                     include_deleted=include_deleted, limit=None)  # fmt: skip
+        return services.records.list_records(
+            request.user, RecordKind.encounter, parent_id=patient_id, include_deleted=include_deleted, limit=None
+        )
 
 
 class EncounterController(Controller):
     path = "/api/v1/encounters"
     tags = ["encounters"]
 
-    @post("/", sync_to_thread=True, summary="Open an encounter for a patient",
-          responses={**REPLAYED, **problems(*BODY, *SESSION, 404, 409, 422)})  # fmt: skip
+    @post(
+        "/",
+        sync_to_thread=True,
+        summary="Open an encounter for a patient",
+        responses={**REPLAYED, **problems(*BODY, *SESSION, 404, 409, 422)},
+    )
     def create(self, data: JSONBody[Encounter], request: AuthedRequest, services: ServicesDep) -> Response[Record]:
         return outcome_response(services.records.create(request.user, RecordKind.encounter, data.id, data))
 
@@ -87,31 +128,53 @@ class EncounterController(Controller):
     def read(self, encounter_id: IdPath, request: AuthedRequest, services: ServicesDep) -> Response[Record]:
         return record_response(services.records.get(request.user, RecordKind.encounter, encounter_id))
 
-    @put("/{encounter_id:str}", sync_to_thread=True, summary="Update an encounter (If-Match required)",
-         responses=UPDATE)  # fmt: skip
-    def update(self, encounter_id: IdPath, data: JSONBody[Encounter], request: AuthedRequest, services: ServicesDep,
-               if_match: IfMatch = None) -> Response[Record]:  # fmt: skip
+    @put(
+        "/{encounter_id:str}", sync_to_thread=True, summary="Update an encounter (If-Match required)", responses=UPDATE
+    )
+    def update(
+        self,
+        encounter_id: IdPath,
+        data: JSONBody[Encounter],
+        request: AuthedRequest,
+        services: ServicesDep,
+        if_match: IfMatch = None,
+    ) -> Response[Record]:
         version = parse_version(if_match, action="updating an encounter")
         return outcome_response(
             services.records.update(request.user, RecordKind.encounter, encounter_id, data, version)
         )
 
-    @delete("/{encounter_id:str}", sync_to_thread=True, status_code=200, summary="Withdraw an encounter",
-            responses=WITHDRAW)  # fmt: skip
-    def withdraw(self, encounter_id: IdPath, request: AuthedRequest, services: ServicesDep, reason: Reason,
-                 if_match: IfMatch = None) -> Response[Record]:  # fmt: skip
+    @delete(
+        "/{encounter_id:str}", sync_to_thread=True, status_code=200, summary="Withdraw an encounter", responses=WITHDRAW
+    )
+    def withdraw(
+        self,
+        encounter_id: IdPath,
+        request: AuthedRequest,
+        services: ServicesDep,
+        reason: Reason,
+        if_match: IfMatch = None,
+    ) -> Response[Record]:
         version = parse_version(if_match, action="withdrawing an encounter")
         return outcome_response(
             services.records.delete(request.user, RecordKind.encounter, encounter_id, version, reason)
         )
 
-    @get("/{encounter_id:str}/history", sync_to_thread=False, summary="Every version of an encounter",
-         responses=problems(*ONE))  # fmt: skip
+    @get(
+        "/{encounter_id:str}/history",
+        sync_to_thread=False,
+        summary="Every version of an encounter",
+        responses=problems(*ONE),
+    )
     def history(self, encounter_id: IdPath, request: AuthedRequest, services: ServicesDep) -> RecordHistory:
         versions = services.records.history(request.user, RecordKind.encounter, encounter_id)
         return RecordHistory(kind=RecordKind.encounter, id=encounter_id, versions=versions)
 
-    @get("/{encounter_id:str}/record", sync_to_thread=False, summary="The encounter with every part and its assessment",
-         responses=problems(*ONE))  # fmt: skip
+    @get(
+        "/{encounter_id:str}/record",
+        sync_to_thread=False,
+        summary="The encounter with every part and its assessment",
+        responses=problems(*ONE),
+    )
     def full_record(self, encounter_id: IdPath, request: AuthedRequest, services: ServicesDep) -> EncounterRecord:
         return services.records.encounter_record(request.user, encounter_id)

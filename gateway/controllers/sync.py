@@ -16,16 +16,29 @@ class SyncController(Controller):
     path = "/api/v1/sync"
     tags = ["sync"]
 
-    @get("/changes", sync_to_thread=False, summary="Record versions after a cursor, oldest first",
-         responses=problems(400, *SESSION))  # fmt: skip
+    @get(
+        "/changes",
+        sync_to_thread=False,
+        summary="Record versions after a cursor, oldest first",
+        responses=problems(400, *SESSION),
+    )
     def changes(
-        self, request: AuthedRequest, services: ServicesDep,
+        self,
+        request: AuthedRequest,
+        services: ServicesDep,
         since: Annotated[int, QueryParameter(ge=0, le=2**63 - 1, description="next_cursor of the previous page")] = 0,
-        limit: Annotated[int, QueryParameter(ge=1, le=2**63 - 1, description="Page size (capped by the gateway)")] = 200,
-    ) -> ChangesPage:  # fmt: skip
+        limit: Annotated[
+            int, QueryParameter(ge=1, le=2**63 - 1, description="Page size (capped by the gateway)")
+        ] = 200,
+    ) -> ChangesPage:
         return services.phone_sync.changes(request.user, since, limit)
 
-    @post("/push", sync_to_thread=True, status_code=200, summary="Apply queued mutations; safe to retry",
-          responses=problems(*BODY, *SESSION))  # fmt: skip
+    @post(
+        "/push",
+        sync_to_thread=True,
+        status_code=200,
+        summary="Apply queued mutations; safe to retry",
+        responses=problems(*BODY, *SESSION),
+    )
     def push(self, data: JSONBody[PushRequest], request: AuthedRequest, services: ServicesDep) -> PushResponse:
         return services.phone_sync.push(request.user, data.mutations)

@@ -16,34 +16,54 @@ class TransferController(Controller):
     path = "/api/v1"
     tags = ["burn center"]
 
-    @post("/encounters/{encounter_id:str}/transfers", sync_to_thread=True, status_code=202,
-          summary="Send the encounter as it stands now to the burn center (encrypted; delivered when a link exists)",
-          responses={200: ResponseSpec(OutboxEntry, description="This version was already sent: its outbox entry"),
-                     **problems(*ONE)})  # fmt: skip
+    @post(
+        "/encounters/{encounter_id:str}/transfers",
+        sync_to_thread=True,
+        status_code=202,
+        summary="Send the encounter as it stands now to the burn center (encrypted; delivered when a link exists)",
+        responses={
+            200: ResponseSpec(OutboxEntry, description="This version was already sent: its outbox entry"),
+            **problems(*ONE),
+        },
+    )
     def send(self, encounter_id: IdPath, request: AuthedRequest, services: ServicesDep) -> Response[OutboxEntry]:
         entry = services.transfers.send(request.user, encounter_id)
         if not entry.unchanged:
             services.run_sync_now()
         return Response(entry, status_code=200 if entry.unchanged else 202)
 
-    @get("/encounters/{encounter_id:str}/transfers", sync_to_thread=False,
-         summary="Versions of this encounter sent to the burn center, and whether each was delivered",
-         responses=problems(*ONE))  # fmt: skip
+    @get(
+        "/encounters/{encounter_id:str}/transfers",
+        sync_to_thread=False,
+        summary="Versions of this encounter sent to the burn center, and whether each was delivered",
+        responses=problems(*ONE),
+    )
     def transfers(self, encounter_id: IdPath, request: AuthedRequest, services: ServicesDep) -> list[OutboxEntry]:
         return services.transfers.transfers(request.user, encounter_id)
 
-    @get("/encounters/{encounter_id:str}/consultations", sync_to_thread=False,
-         summary="The burn center consultants' notes on this encounter (decision support)",
-         responses=problems(*ONE))  # fmt: skip
+    @get(
+        "/encounters/{encounter_id:str}/consultations",
+        sync_to_thread=False,
+        summary="The burn center consultants' notes on this encounter (decision support)",
+        responses=problems(*ONE),
+    )
     def consultations(self, encounter_id: IdPath, request: AuthedRequest, services: ServicesDep) -> list[Record]:
         return services.transfers.consultations(request.user, encounter_id)
 
-    @get("/transfers", sync_to_thread=False, summary="The outbox: every case sent or waiting, newest first",
-         responses=problems(*SESSION))  # fmt: skip
+    @get(
+        "/transfers",
+        sync_to_thread=False,
+        summary="The outbox: every case sent or waiting, newest first",
+        responses=problems(*SESSION),
+    )
     def outbox(self, request: AuthedRequest, services: ServicesDep) -> list[OutboxEntry]:
         return services.transfers.all_transfers(request.user)
 
-    @get("/transfers/status", sync_to_thread=False, summary="The link to the burn center: last round, errors, backoff",
-         responses=problems(*SESSION))  # fmt: skip
+    @get(
+        "/transfers/status",
+        sync_to_thread=False,
+        summary="The link to the burn center: last round, errors, backoff",
+        responses=problems(*SESSION),
+    )
     def status(self, request: AuthedRequest, services: ServicesDep) -> SyncStatus:
         return services.transfers.status(request.user)

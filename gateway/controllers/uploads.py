@@ -87,52 +87,84 @@ class UploadController(Controller):
 
     # Named to sort before `create`: a Controller registers handlers in name order, and the
     # first handler on a path gets Litestar's automatic OPTIONS handler, which would shadow this one.
-    @route("/", http_method=[HttpMethod.OPTIONS], status_code=204, sync_to_thread=False, summary="tus discovery",
-           include_in_schema=False)  # fmt: skip
+    @route(
+        "/",
+        http_method=[HttpMethod.OPTIONS],
+        status_code=204,
+        sync_to_thread=False,
+        summary="tus discovery",
+        include_in_schema=False,
+    )
     def capabilities(self, services: ServicesDep) -> Response[None]:
-        return Response(None, status_code=204, headers={
-            "Tus-Resumable": TUS_VERSION, "Tus-Version": TUS_VERSION,
-            "Tus-Extension": "creation,termination,checksum,expiration",
-            "Tus-Max-Size": str(services.config.uploads.max_upload_bytes),
-            "Tus-Checksum-Algorithm": ",".join(CHECKSUMS),
-        })  # fmt: skip
+        return Response(
+            None,
+            status_code=204,
+            headers={
+                "Tus-Resumable": TUS_VERSION,
+                "Tus-Version": TUS_VERSION,
+                "Tus-Extension": "creation,termination,checksum,expiration",
+                "Tus-Max-Size": str(services.config.uploads.max_upload_bytes),
+                "Tus-Checksum-Algorithm": ",".join(CHECKSUMS),
+            },
+        )
 
-    @post("/", sync_to_thread=True, summary="Start an upload (Upload-Length, Upload-Metadata with encounter_id)",
-          responses=problems(*ONE, 412, 413, 422, 429, 507))  # fmt: skip
+    @post(
+        "/",
+        sync_to_thread=True,
+        summary="Start an upload (Upload-Length, Upload-Metadata with encounter_id)",
+        responses=problems(*ONE, 412, 413, 422, 429, 507),
+    )
     def create(
-        self, request: AuthedRequest, services: ServicesDep,
+        self,
+        request: AuthedRequest,
+        services: ServicesDep,
         upload_length: Annotated[int, HeaderParameter(name="Upload-Length", ge=0)],
         upload_metadata: Annotated[str | None, HeaderParameter(name="Upload-Metadata")] = None,
-    ) -> Response[None]:  # fmt: skip
+    ) -> Response[None]:
         _require_tus(request)
         state = services.uploads.create(request.user, upload_length, parse_metadata(upload_metadata))
         location = f"{str(request.base_url).rstrip('/')}{self.path}/{state.id}"
         return Response(None, status_code=201, headers={**_headers(state), "Location": location})
 
-    @head("/{upload_id:str}", sync_to_thread=True, summary="How many bytes the gateway holds",
-          responses=problems(*ONE, 410, 412))  # fmt: skip
+    @head(
+        "/{upload_id:str}",
+        sync_to_thread=True,
+        summary="How many bytes the gateway holds",
+        responses=problems(*ONE, 410, 412),
+    )
     def offset(self, upload_id: IdPath, request: AuthedRequest, services: ServicesDep) -> Response[None]:
         _require_tus(request)
         state = services.uploads.status(request.user, upload_id)
         return Response(None, status_code=200, headers={**_headers(state), "Upload-Length": str(state.length)})
 
-    @route("/{upload_id:str}", http_method=[HttpMethod.PATCH], status_code=204, request_max_body_size=None,
-           summary="Send bytes from Upload-Offset (application/offset+octet-stream)",
-           responses=problems(*ONE, 409, 410, 412, 413, 415, 422, 460))  # fmt: skip
+    @route(
+        "/{upload_id:str}",
+        http_method=[HttpMethod.PATCH],
+        status_code=204,
+        request_max_body_size=None,
+        summary="Send bytes from Upload-Offset (application/offset+octet-stream)",
+        responses=problems(*ONE, 409, 410, 412, 413, 415, 422, 460),
+    )
     async def append(
-        self, upload_id: IdPath, request: AuthedRequest, services: ServicesDep,
+        self,
+        upload_id: IdPath,
+        request: AuthedRequest,
+        services: ServicesDep,
         upload_offset: Annotated[int, HeaderParameter(name="Upload-Offset", ge=0)],
         upload_checksum: Annotated[str | None, HeaderParameter(name="Upload-Checksum")] = None,
-    ) -> Response[None]:  # fmt: skip
+    ) -> Response[None]:
         return await _append(request, services, upload_id, upload_offset, upload_checksum)
 
     @post("/{upload_id:str}", status_code=204, request_max_body_size=None, include_in_schema=False)
     async def overridden(
-        self, upload_id: IdPath, request: AuthedRequest, services: ServicesDep,
+        self,
+        upload_id: IdPath,
+        request: AuthedRequest,
+        services: ServicesDep,
         method: Annotated[str, HeaderParameter(name="X-HTTP-Method-Override")],
         upload_offset: Annotated[int | None, HeaderParameter(name="Upload-Offset", ge=0)] = None,
         upload_checksum: Annotated[str | None, HeaderParameter(name="Upload-Checksum")] = None,
-    ) -> Response[None]:  # fmt: skip
+    ) -> Response[None]:
         """tus clients on platforms without PATCH (or DELETE) send a POST that names the method."""
         if method.upper() == "PATCH" and upload_offset is not None:
             return await _append(request, services, upload_id, upload_offset, upload_checksum)
@@ -142,20 +174,36 @@ class UploadController(Controller):
             return Response(None, status_code=204, headers={"Tus-Resumable": TUS_VERSION})
         raise BadRequest("X-HTTP-Method-Override must be PATCH (with Upload-Offset) or DELETE")
 
-    @delete("/{upload_id:str}", sync_to_thread=True, status_code=204, summary="Abandon an upload (tus termination)",
-            responses=problems(*ONE, 409, 410, 412))  # fmt: skip
+    @delete(
+        "/{upload_id:str}",
+        sync_to_thread=True,
+        status_code=204,
+        summary="Abandon an upload (tus termination)",
+        responses=problems(*ONE, 409, 410, 412),
+    )
     def terminate(self, upload_id: IdPath, request: AuthedRequest, services: ServicesDep) -> Response[None]:
         _require_tus(request)
         services.uploads.terminate(request.user, upload_id)
         return Response(None, status_code=204, headers={"Tus-Resumable": TUS_VERSION})
 
-    @get("/{upload_id:str}", sync_to_thread=True, summary="The upload, and once complete its asset and quality verdict",
-         responses=problems(*ONE, 410))  # fmt: skip
+    @get(
+        "/{upload_id:str}",
+        sync_to_thread=True,
+        summary="The upload, and once complete its asset and quality verdict",
+        responses=problems(*ONE, 410),
+    )
     def read(self, upload_id: IdPath, request: AuthedRequest, services: ServicesDep) -> UploadStatus:
         state = services.uploads.status(request.user, upload_id)
         asset = services.assets.get(request.user, state.asset_id) if state.asset_id else None
-        return UploadStatus(id=state.id, encounter_id=state.encounter_id, length=state.length, offset=state.offset,
-                            state=state.phase, expires_at=state.expires_at.isoformat(), asset=asset)  # fmt: skip
+        return UploadStatus(
+            id=state.id,
+            encounter_id=state.encounter_id,
+            length=state.length,
+            offset=state.offset,
+            state=state.phase,
+            expires_at=state.expires_at.isoformat(),
+            asset=asset,
+        )
 
 
 async def _append(
@@ -183,8 +231,9 @@ async def _append(
     return Response(None, status_code=204, headers=headers)
 
 
-async def _receive(request: Request, part: Path, offset: int, length: int, checksum: tuple[str, bytes] | None,
-                   timeout: float) -> int:  # fmt: skip
+async def _receive(
+    request: Request, part: Path, offset: int, length: int, checksum: tuple[str, bytes] | None, timeout: float
+) -> int:
     """Stream the body into the part file from `offset`; returns the bytes kept.
 
     A checksummed body is all or nothing; an unchecked one keeps what arrived before a

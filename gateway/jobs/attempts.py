@@ -24,8 +24,17 @@ def begin(conn: sqlite3.Connection, job_id: str, attempt: int, at: str, resumed_
     )
 
 
-def end(conn: sqlite3.Connection, job_id: str, outcome: AttemptOutcome, at: str, *, stage: str, reason: str = "",
-        exit: str = "", log_tail: str = "") -> None:  # fmt: skip
+def end(
+    conn: sqlite3.Connection,
+    job_id: str,
+    outcome: AttemptOutcome,
+    at: str,
+    *,
+    stage: str,
+    reason: str = "",
+    exit: str = "",
+    log_tail: str = "",
+) -> None:
     """Close the job's open try (none is open for a job queued before attempts were kept: nothing happens)."""
     conn.execute(
         "UPDATE analysis_attempts SET outcome = ?, ended_at = ?, stage = ?, reason = ?, exit = ?, log_tail = ?"
@@ -47,7 +56,7 @@ def history(conn: sqlite3.Connection, job_id: str) -> list[JobAttempt]:
             exit=r["exit"],
             reason=r["reason"],
             log_tail=r["log_tail"],
-        )  # fmt: skip
+        )
         for r in rows
     ]
 

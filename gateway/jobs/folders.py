@@ -99,8 +99,12 @@ def clean_up(db: Database, config: Config) -> int:
             shutil.rmtree(folder, ignore_errors=True)
         with db.write() as conn:
             conn.execute("UPDATE analysis_jobs SET cleaned_at = ? WHERE id = ?", (iso(utcnow()), row["id"]))
-        log.info("analysis %s (%s): work files past the %g-day retention removed", row["id"], row["state"],
-                 config.jobs.retention_days)  # fmt: skip
+        log.info(
+            "analysis %s (%s): work files past the %g-day retention removed",
+            row["id"],
+            row["state"],
+            config.jobs.retention_days,
+        )
     return len(rows)
 
 

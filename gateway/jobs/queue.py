@@ -23,8 +23,11 @@ from schemas.errors import Conflict, NotFound
 from schemas.jobs import FINISHED, AnalysisJob, AttemptOutcome, CaptureTime, JobAttempt, JobState
 
 WORKER_DIED = "lost its worker (killed, power cut or out of memory)"
-_ENDED = {JobState.done: AttemptOutcome.done, JobState.failed: AttemptOutcome.failed,
-          JobState.cancelled: AttemptOutcome.cancelled}  # fmt: skip
+_ENDED = {
+    JobState.done: AttemptOutcome.done,
+    JobState.failed: AttemptOutcome.failed,
+    JobState.cancelled: AttemptOutcome.cancelled,
+}
 
 
 @dataclass(frozen=True)
@@ -79,9 +82,14 @@ class JobQueue:
             conn.execute(
                 "UPDATE analysis_jobs SET state = 'running', lease_owner = ?, lease_expires_at = ?,"
                 " attempts = attempts + 1, started_at = COALESCE(started_at, ?), message = ? WHERE id = ?",
-                (owner, _at(now + dt.timedelta(seconds=self.conf.lease_s)), _at(now),
-                 f"starting (try {row['attempts'] + 1} of {self.conf.max_attempts})", row["id"]),
-            )  # fmt: skip
+                (
+                    owner,
+                    _at(now + dt.timedelta(seconds=self.conf.lease_s)),
+                    _at(now),
+                    f"starting (try {row['attempts'] + 1} of {self.conf.max_attempts})",
+                    row["id"],
+                ),
+            )
             attempts.begin(conn, row["id"], row["attempts"] + 1, _at(now), row["stage"])
             return Claim(row["id"], owner, row["attempts"] + 1)
 
@@ -107,8 +115,16 @@ class JobQueue:
             )
             return cur.rowcount == 1
 
-    def finish_in(self, conn: sqlite3.Connection, claim: Claim, state: JobState, *, result_status: str | None,
-                  error: str | None, message: str) -> bool:  # fmt: skip
+    def finish_in(
+        self,
+        conn: sqlite3.Connection,
+        claim: Claim,
+        state: JobState,
+        *,
+        result_status: str | None,
+        error: str | None,
+        message: str,
+    ) -> bool:
         """Close the job inside the caller's transaction; False (nothing written) if the worker lost it."""
         cur = conn.execute(
             "UPDATE analysis_jobs SET state = ?, result_status = ?, error = ?, message = ?, finished_at = ?,"
@@ -126,8 +142,15 @@ class JobQueue:
         with self.db.write() as conn:
             return self.finish_in(conn, claim, state, result_status=None, error=error, message=message)
 
-    def retry_or_fail(self, claim: Claim, reason: str, *, outcome: AttemptOutcome = AttemptOutcome.crashed,
-                      exit: str = "", log_tail: str = "") -> JobState:  # fmt: skip
+    def retry_or_fail(
+        self,
+        claim: Claim,
+        reason: str,
+        *,
+        outcome: AttemptOutcome = AttemptOutcome.crashed,
+        exit: str = "",
+        log_tail: str = "",
+    ) -> JobState:
         """After a crash of this try: queue it again with backoff, or fail it when the tries are used up.
         `reason` completes 'try 2 ...', e.g. 'ended by SIGSEGV'."""
         with self.db.write() as conn:
@@ -140,8 +163,17 @@ class JobQueue:
                 return JobState.running  # lost meanwhile: its new holder decides
             return self._after_try(conn, claim.job_id, row, reason, _now(), outcome, exit, log_tail)
 
-    def _after_try(self, conn, job_id: str, row, reason: str, now: dt.datetime,
-                   outcome: AttemptOutcome = AttemptOutcome.lost, exit: str = "", log_tail: str = "") -> JobState:  # fmt: skip
+    def _after_try(
+        self,
+        conn,
+        job_id: str,
+        row,
+        reason: str,
+        now: dt.datetime,
+        outcome: AttemptOutcome = AttemptOutcome.lost,
+        exit: str = "",
+        log_tail: str = "",
+    ) -> JobState:
         stage = row["stage"]
         ended = attempts.ended(row["attempts"], reason, stage)
         attempts.end(conn, job_id, outcome, _at(now), stage=stage, reason=reason, exit=exit, log_tail=log_tail)
@@ -161,7 +193,7 @@ class JobQueue:
             "UPDATE analysis_jobs SET state = ?, error = ?, next_attempt_at = ?, lease_owner = NULL,"
             " lease_expires_at = NULL, finished_at = ?, message = ? WHERE id = ?",
             (state.value, error, _at(when), _at(now) if state in FINISHED else None, message, job_id),
-        )  # fmt: skip
+        )
         return state
 
     def release(self, claim: Claim) -> None:
@@ -176,8 +208,14 @@ class JobQueue:
                 (_at(_now()), _at(_now()), claim.job_id, claim.owner),
             ).fetchone()
             if row is not None:  # still this worker's try (a lost lease's try is closed by whoever took it over)
-                attempts.end(conn, claim.job_id, AttemptOutcome.handed_back, _at(_now()), stage=row["stage"],
-                             reason="was handed back: its worker was stopping")  # fmt: skip
+                attempts.end(
+                    conn,
+                    claim.job_id,
+                    AttemptOutcome.handed_back,
+                    _at(_now()),
+                    stage=row["stage"],
+                    reason="was handed back: its worker was stopping",
+                )
 
     # the gateway ---------------------------------------------------------------------------------------------
     def reap(self) -> int:
@@ -259,12 +297,26 @@ def _position(conn, row) -> int | None:
 def job_from_row(row, position: int | None = None, history: list[str] | None = None) -> AnalysisJob:
     state = JobState(row["state"])
     return AnalysisJob(
-        id=row["id"], encounter_id=row["encounter_id"], patient_id=row["patient_id"], state=state,
-        priority=row["priority"], stage=row["stage"], fraction=row["fraction"], message=row["message"],
-        attempts=row["attempts"], max_attempts=row["max_attempts"],
-        next_attempt_at=row["next_attempt_at"] if state is JobState.queued else None, error=row["error"],
-        cancel_requested=bool(row["cancel_requested"]), pictures=row["pictures"], created_at=row["created_at"],
-        created_by=row["created_by"], started_at=row["started_at"], finished_at=row["finished_at"],
-        queue_position=position, result_status=row["result_status"], history=history or [],
+        id=row["id"],
+        encounter_id=row["encounter_id"],
+        patient_id=row["patient_id"],
+        state=state,
+        priority=row["priority"],
+        stage=row["stage"],
+        fraction=row["fraction"],
+        message=row["message"],
+        attempts=row["attempts"],
+        max_attempts=row["max_attempts"],
+        next_attempt_at=row["next_attempt_at"] if state is JobState.queued else None,
+        error=row["error"],
+        cancel_requested=bool(row["cancel_requested"]),
+        pictures=row["pictures"],
+        created_at=row["created_at"],
+        created_by=row["created_by"],
+        started_at=row["started_at"],
+        finished_at=row["finished_at"],
+        queue_position=position,
+        result_status=row["result_status"],
+        history=history or [],
         captured=msgspec.json.decode(row["captured"], type=CaptureTime) if row["captured"] else None,
-    )  # fmt: skip
+    )

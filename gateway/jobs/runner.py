@@ -64,8 +64,10 @@ def run(config: Config, claim: Claim) -> JobState:
         source, masks, ruler = _lay_out(config, folder, inputs)
         patient = _patient(db, row["encounter_id"], inputs)
         if inputs.marker_side_mm is not None:
-            config = msgspec.structs.replace(config, reconstruction=msgspec.structs.replace(
-                config.reconstruction, marker_side_mm=inputs.marker_side_mm))  # fmt: skip
+            config = msgspec.structs.replace(
+                config,
+                reconstruction=msgspec.structs.replace(config.reconstruction, marker_side_mm=inputs.marker_side_mm),
+            )
 
         def progress(stage: str) -> None:
             start, text = STAGES.get(stage, (0.0, stage))
@@ -74,8 +76,9 @@ def run(config: Config, claim: Claim) -> JobState:
             except StorageError:  # progress is for people waiting; the analysis goes on without it
                 log.warning("analysis %s: progress not recorded (database busy)", claim.job_id)
 
-        result = analyze(config, source, folder / "analysis", masks=masks, ruler=ruler, patient=patient,
-                         progress=progress)  # fmt: skip
+        result = analyze(
+            config, source, folder / "analysis", masks=masks, ruler=ruler, patient=patient, progress=progress
+        )
         state = _store(db, queue, claim, row, inputs, result)
         if state is JobState.done:
             try:
@@ -113,9 +116,13 @@ def _lay_out(config: Config, folder: Path, inputs: JobInputs) -> tuple[Path, Pat
                 write_json(masks / f"{pictures[mask.asset_id].stem}.json", {"polygons": mask.polygons})
     ruler = None
     if inputs.ruler is not None:
-        ruler = RulerPoints(distance_mm=inputs.ruler.distance_mm,
-                            marks=[RulerMark(image=f"{pictures[m.asset_id].stem}{pictures[m.asset_id].suffix}", a=m.a,
-                                             b=m.b) for m in inputs.ruler.marks])  # fmt: skip
+        ruler = RulerPoints(
+            distance_mm=inputs.ruler.distance_mm,
+            marks=[
+                RulerMark(image=f"{pictures[m.asset_id].stem}{pictures[m.asset_id].suffix}", a=m.a, b=m.b)
+                for m in inputs.ruler.marks
+            ],
+        )
     return source, masks, ruler
 
 
@@ -141,19 +148,37 @@ def _store(db: Database, queue: JobQueue, claim: Claim, row, inputs: JobInputs, 
     now = iso(utcnow())
     with db.write() as conn:
         if result.status is AnalysisStatus.failed:
-            kept = queue.finish_in(conn, claim, JobState.failed, result_status="failed", error=result.reason,
-                                   message="no measurement: see the reason")  # fmt: skip
+            kept = queue.finish_in(
+                conn,
+                claim,
+                JobState.failed,
+                result_status="failed",
+                error=result.reason,
+                message="no measurement: see the reason",
+            )
             return JobState.failed if kept else JobState.running
-        if not queue.finish_in(conn, claim, JobState.done, result_status=result.status.value, error=None,
-                               message="finished"):  # fmt: skip
+        if not queue.finish_in(
+            conn, claim, JobState.done, result_status=result.status.value, error=None, message="finished"
+        ):
             return JobState.running
-        record = BurnAnalysis(encounter_id=row["encounter_id"], job_id=claim.job_id,
-                              assets=[p.asset_id for p in inputs.pictures], requested_by=row["created_by"],
-                              requested_at=row["created_at"], completed_at=now, captured=inputs.captured,
-                              result=result)  # fmt: skip
-        audit.insert_server_record(conn, kind=RecordKind.burn_analysis, record_id=claim.job_id,
-                                   parent_id=row["encounter_id"], data=msgspec.json.encode(record),
-                                   action="analysis.store")  # fmt: skip
+        record = BurnAnalysis(
+            encounter_id=row["encounter_id"],
+            job_id=claim.job_id,
+            assets=[p.asset_id for p in inputs.pictures],
+            requested_by=row["created_by"],
+            requested_at=row["created_at"],
+            completed_at=now,
+            captured=inputs.captured,
+            result=result,
+        )
+        audit.insert_server_record(
+            conn,
+            kind=RecordKind.burn_analysis,
+            record_id=claim.job_id,
+            parent_id=row["encounter_id"],
+            data=msgspec.json.encode(record),
+            action="analysis.store",
+        )
     log.info("analysis %s stored: %s, area %s cm2", claim.job_id, result.status.value, result.metrics.area_cm2)
     return JobState.done
 

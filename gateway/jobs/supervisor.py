@@ -19,8 +19,9 @@ class Workers:
         self.stopped = False
 
     def _spawn(self, index: int):
-        process = self.context.Process(target=worker.main, args=(self.config, True), name=f"burnedge-worker-{index}",
-                                       daemon=False)  # fmt: skip
+        process = self.context.Process(
+            target=worker.main, args=(self.config, True), name=f"burnedge-worker-{index}", daemon=False
+        )
         process.start()
         log.info("analysis worker %d started (pid %d)", index, process.pid)
         return process
@@ -33,8 +34,12 @@ class Workers:
         restarted = 0
         for i, process in enumerate(self.processes if not self.stopped else []):
             if not process.is_alive():
-                log.warning("analysis worker %d (pid %s) %s: restarting it", i, process.pid,
-                            worker.describe_exit(process.exitcode))  # fmt: skip
+                log.warning(
+                    "analysis worker %d (pid %s) %s: restarting it",
+                    i,
+                    process.pid,
+                    worker.describe_exit(process.exitcode),
+                )
                 process.join(timeout=0)
                 self.processes[i] = self._spawn(i)
                 restarted += 1

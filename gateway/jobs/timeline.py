@@ -43,8 +43,13 @@ def sessions(db: Database, config: Config, patient_id: str) -> list:
         injury = encounter.data.get("time_of_injury")
         # Jobs queued before capture times were kept: the visit's arrival stands in.
         taken = msgspec.json.decode(row["captured"], type=CaptureTime).at if row["captured"] else None
-        visits.append((dt.datetime.fromisoformat(taken or encounter.data["time_of_arrival"]), row["id"],
-                       dt.datetime.fromisoformat(injury) if injury else None))  # fmt: skip
+        visits.append(
+            (
+                dt.datetime.fromisoformat(taken or encounter.data["time_of_arrival"]),
+                row["id"],
+                dt.datetime.fromisoformat(injury) if injury else None,
+            )
+        )
     visits.sort()
     from processing.longitudinal.track import SessionAnalysis  # Open3D: only ever in a job's process
 

@@ -84,8 +84,9 @@ class Worker:
     def run(self, claim: Claim) -> JobState:
         log.info("worker %s: analysis %s, try %d", self.owner, claim.job_id, claim.attempt)
         output = TryLog(folders.job_dir(self.config, claim.job_id) / "logs" / f"try-{claim.attempt}.log")
-        child = self.context.Process(target=_run_child, args=(self.config, claim, str(output.path)),
-                                     name=f"analysis-{claim.job_id}")  # fmt: skip
+        child = self.context.Process(
+            target=_run_child, args=(self.config, claim, str(output.path)), name=f"analysis-{claim.job_id}"
+        )
         child.start()
         try:
             return self._watch(claim, child, output)
@@ -105,8 +106,13 @@ class Worker:
             if time.monotonic() - started > conf.max_run_s and child.is_alive():
                 _kill(child)
                 log.error("analysis %s: still running after %.0f s, stopped as hung", claim.job_id, conf.max_run_s)
-                return self._ended(claim, f"was still running after {conf.max_run_s:.0f} s and was stopped as hung",
-                                   AttemptOutcome.hung, "SIGKILL", output)  # fmt: skip
+                return self._ended(
+                    claim,
+                    f"was still running after {conf.max_run_s:.0f} s and was stopped as hung",
+                    AttemptOutcome.hung,
+                    "SIGKILL",
+                    output,
+                )
             if time.monotonic() < next_beat or not child.is_alive() or finished:
                 continue
             try:
@@ -126,20 +132,27 @@ class Worker:
                 log.info("analysis %s cancelled", claim.job_id)
                 return JobState.cancelled
         if child.exitcode != 0:
-            return self._ended(claim, describe_exit(child.exitcode), AttemptOutcome.crashed, exit_name(child.exitcode),
-                               output)  # fmt: skip
+            return self._ended(
+                claim, describe_exit(child.exitcode), AttemptOutcome.crashed, exit_name(child.exitcode), output
+            )
         return JobState.done
 
     def _ended(self, claim: Claim, reason: str, outcome: AttemptOutcome, exit: str, output: TryLog) -> JobState:
         """A try that did not finish: recorded with the end of its log, then retried or failed."""
         output.forward()
         tail = output.tail()
-        state = _quietly(lambda: self.queue.retry_or_fail(claim, reason, outcome=outcome, exit=exit, log_tail=tail),
-                         JobState.running)  # fmt: skip
+        state = _quietly(
+            lambda: self.queue.retry_or_fail(claim, reason, outcome=outcome, exit=exit, log_tail=tail), JobState.running
+        )
         said = _quietly(lambda: self.queue.get(claim.job_id), None)
         lines = "\n    ".join(tail.strip().splitlines()[-12:])
-        log.error("analysis %s: %s (%s); its process last wrote:\n    %s", claim.job_id,
-                  said.error if said and said.error else f"try {claim.attempt} {reason}", state.value, lines)  # fmt: skip
+        log.error(
+            "analysis %s: %s (%s); its process last wrote:\n    %s",
+            claim.job_id,
+            said.error if said and said.error else f"try {claim.attempt} {reason}",
+            state.value,
+            lines,
+        )
         return state
 
 

@@ -64,8 +64,13 @@ class AccountService(UserCare):
         if not self._password_ok(row, password):
             with self.db.write() as conn:
                 # The typed name is not kept unless it is an account: people type passwords into it.
-                audit.append(conn, action="auth.failed", user_id=row["id"] if row else None, device_id=None,
-                             detail="wrong password" if row else "unknown username")  # fmt: skip
+                audit.append(
+                    conn,
+                    action="auth.failed",
+                    user_id=row["id"] if row else None,
+                    device_id=None,
+                    detail="wrong password" if row else "unknown username",
+                )
             raise AuthenticationFailed("wrong username or password")
         if not row["active"]:
             raise AuthenticationFailed("this account is disabled: ask an administrator")
@@ -134,8 +139,14 @@ class AccountService(UserCare):
             raise AuthenticationFailed("session unknown or ended: log in again")
         if dt.datetime.fromisoformat(row["expires_at"]) <= utcnow():
             raise AuthenticationFailed("session expired: log in again")
-        return Principal(row["user_id"], row["username"], Role(row["role"]), row["device_id"], th,
-                         must_change_password=bool(row["must_change_password"]))  # fmt: skip
+        return Principal(
+            row["user_id"],
+            row["username"],
+            Role(row["role"]),
+            row["device_id"],
+            th,
+            must_change_password=bool(row["must_change_password"]),
+        )
 
     def logout(self, principal: Principal) -> None:
         with self.db.write() as conn:
@@ -156,8 +167,13 @@ class AccountService(UserCare):
                 "INSERT INTO pairing_codes (code_hash, device_name, created_by, created_at, expires_at) VALUES (?,?,?,?,?)",
                 (token_hash(raw), body.device_name, actor.user_id, iso(now), iso(expires)),
             )
-            audit.append(conn, action="device.pairing_code", user_id=actor.user_id, device_id=actor.device_id,
-                         detail=body.device_name)  # fmt: skip
+            audit.append(
+                conn,
+                action="device.pairing_code",
+                user_id=actor.user_id,
+                device_id=actor.device_id,
+                detail=body.device_name,
+            )
         return PairingCode(code=code, device_name=body.device_name, expires_at=expires)
 
     def pair(self, body: PairRequest, *, client: str) -> DeviceToken:
@@ -182,8 +198,15 @@ class AccountService(UserCare):
                         row["created_by"],
                     ),
                 )
-                audit.append(conn, action="device.pair", user_id=row["created_by"], device_id=device_id,
-                             kind="device", record_id=device_id, detail=row["device_name"])  # fmt: skip
+                audit.append(
+                    conn,
+                    action="device.pair",
+                    user_id=row["created_by"],
+                    device_id=device_id,
+                    kind="device",
+                    record_id=device_id,
+                    detail=row["device_name"],
+                )
         if not usable:
             # One answer for wrong, used and expired codes: nothing to learn about which codes exist.
             raise AuthenticationFailed("pairing code not valid (wrong, already used or expired): ask for a new one")
@@ -206,8 +229,15 @@ class AccountService(UserCare):
                 conn.execute(
                     "UPDATE sessions SET revoked_at = ? WHERE device_id = ? AND revoked_at IS NULL", (now, device_id)
                 )
-                audit.append(conn, action="device.revoke", user_id=actor.user_id, device_id=actor.device_id,
-                             kind="device", record_id=device_id, detail=row["name"])  # fmt: skip
+                audit.append(
+                    conn,
+                    action="device.revoke",
+                    user_id=actor.user_id,
+                    device_id=actor.device_id,
+                    kind="device",
+                    record_id=device_id,
+                    detail=row["name"],
+                )
             return _device(conn.execute("SELECT * FROM devices WHERE id = ?", (device_id,)).fetchone())
 
 
@@ -216,6 +246,11 @@ def _device(row) -> Device:
         return dt.datetime.fromisoformat(value) if value else None
 
     return Device(
-        id=row["id"], name=row["name"], fingerprint=row["fingerprint"], paired_at=t(row["paired_at"]),
-        paired_by=row["paired_by"], revoked_at=t(row["revoked_at"]), last_seen_at=t(row["last_seen_at"]),
-    )  # fmt: skip
+        id=row["id"],
+        name=row["name"],
+        fingerprint=row["fingerprint"],
+        paired_at=t(row["paired_at"]),
+        paired_by=row["paired_by"],
+        revoked_at=t(row["revoked_at"]),
+        last_seen_at=t(row["last_seen_at"]),
+    )

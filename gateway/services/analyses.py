@@ -65,15 +65,25 @@ class AnalysisService:
         with self.db.read() as conn:
             patient = store.get_head(conn, RecordKind.patient, encounter.data["patient_id"]).data
         # What the analysis reads from the record (%TBSA, provisional): a correction makes a new analysis.
-        record = [patient.get("height_cm"), patient.get("weight_kg"), encounter.data.get("weight_kg"),
-                  encounter.data.get("time_of_injury")]  # fmt: skip
+        record = [
+            patient.get("height_cm"),
+            patient.get("weight_kg"),
+            encounter.data.get("weight_kg"),
+            encounter.data.get("time_of_injury"),
+        ]
         digest = _digest(self.config, refs, body, record)
         mode = EncounterMode(encounter.data["mode"])
         now = iso(utcnow())
         injury = encounter.data.get("time_of_injury")
         captured = capture_time(pictures, dt.datetime.fromisoformat(injury) if injury else None, self.config.analysis)
-        inputs = JobInputs(pictures=refs, masks=body.masks, ruler=body.ruler, marker_side_mm=body.marker_side_mm,
-                           requested_at=now, captured=captured)  # fmt: skip
+        inputs = JobInputs(
+            pictures=refs,
+            masks=body.masks,
+            ruler=body.ruler,
+            marker_side_mm=body.marker_side_mm,
+            requested_at=now,
+            captured=captured,
+        )
         with self.db.write() as conn:
             require_live_encounter(conn, encounter_id)
             existing = conn.execute(
@@ -89,14 +99,33 @@ class AnalysisService:
                     "INSERT INTO analysis_jobs (id, encounter_id, patient_id, input_digest, request, state, priority,"
                     " max_attempts, next_attempt_at, pictures, created_at, created_by, user_id, message, captured)"
                     " VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?,?)",
-                    (job_id, encounter_id, encounter.data["patient_id"], digest, msgspec.json.encode(inputs).decode(),
-                     JobState.queued.value, 0 if mode is EncounterMode.emergency else 1, self.config.jobs.max_attempts,
-                     now, len(refs), now, principal.username, principal.user_id, "waiting for a worker",
-                     msgspec.json.encode(captured).decode()),
-                )  # fmt: skip
-                audit.append(conn, action="analysis.request", user_id=principal.user_id, device_id=principal.device_id,
-                             kind="analysis_job", record_id=job_id,
-                             detail=json.dumps({"encounter": encounter_id, "pictures": len(refs)}))  # fmt: skip
+                    (
+                        job_id,
+                        encounter_id,
+                        encounter.data["patient_id"],
+                        digest,
+                        msgspec.json.encode(inputs).decode(),
+                        JobState.queued.value,
+                        0 if mode is EncounterMode.emergency else 1,
+                        self.config.jobs.max_attempts,
+                        now,
+                        len(refs),
+                        now,
+                        principal.username,
+                        principal.user_id,
+                        "waiting for a worker",
+                        msgspec.json.encode(captured).decode(),
+                    ),
+                )
+                audit.append(
+                    conn,
+                    action="analysis.request",
+                    user_id=principal.user_id,
+                    device_id=principal.device_id,
+                    kind="analysis_job",
+                    record_id=job_id,
+                    detail=json.dumps({"encounter": encounter_id, "pictures": len(refs)}),
+                )
         return self.queue.get(job_id), created
 
     def _pictures(self, principal: Principal, encounter_id: str, body: AnalysisRequest) -> list[Asset]:
@@ -117,8 +146,10 @@ class AnalysisService:
                 raise InvalidInput(f"{', '.join(videos)}: give the frames taken from a video, not the video")
         minimum = self.config.reconstruction.min_views
         if len(chosen) < minimum:
-            raise InvalidInput(f"{len(chosen)} pictures: a 3D analysis needs at least {minimum} (the capture "
-                               "readiness check says what is missing)")  # fmt: skip
+            raise InvalidInput(
+                f"{len(chosen)} pictures: a 3D analysis needs at least {minimum} (the capture "
+                "readiness check says what is missing)"
+            )
         return chosen
 
     def get(self, principal: Principal, job_id: str) -> AnalysisJob:
@@ -128,8 +159,10 @@ class AnalysisService:
     def attempts(self, principal: Principal, job_id: str) -> list[JobAttempt]:
         """Every try of the job and how it ended; the logs' server paths are shortened."""
         require_read(principal, RecordKind.burn_analysis)
-        return [msgspec.structs.replace(a, log_tail=folders.without_server_paths(self.config, a.log_tail))
-                for a in self.queue.attempt_history(job_id)]  # fmt: skip
+        return [
+            msgspec.structs.replace(a, log_tail=folders.without_server_paths(self.config, a.log_tail))
+            for a in self.queue.attempt_history(job_id)
+        ]
 
     def for_encounter(self, principal: Principal, encounter_id: str) -> list[AnalysisJob]:
         require_read(principal, RecordKind.burn_analysis)
@@ -140,8 +173,15 @@ class AnalysisService:
         require_capture(principal)
         state = self.queue.cancel(job_id)
         with self.db.write() as conn:
-            audit.append(conn, action="analysis.cancel", user_id=principal.user_id, device_id=principal.device_id,
-                         kind="analysis_job", record_id=job_id, detail=state.value)  # fmt: skip
+            audit.append(
+                conn,
+                action="analysis.cancel",
+                user_id=principal.user_id,
+                device_id=principal.device_id,
+                kind="analysis_job",
+                record_id=job_id,
+                detail=state.value,
+            )
         return self.queue.get(job_id)
 
     def result(self, principal: Principal, job_id: str) -> AnalysisResult:
@@ -193,18 +233,31 @@ def _check_mask(mask, pictures: dict[str, Asset]) -> None:
     )
     if image is None:
         raise InvalidInput(f"mask for {mask.asset_id}: not a PNG image")
-    size = (asset.verdict.figures.width, asset.verdict.figures.height) if asset.verdict and asset.verdict.figures \
-        else None  # fmt: skip
+    size = (
+        (asset.verdict.figures.width, asset.verdict.figures.height) if asset.verdict and asset.verdict.figures else None
+    )
     if size is not None and (image.shape[1], image.shape[0]) != size:
-        raise InvalidInput(f"mask for {mask.asset_id} is {image.shape[1]}x{image.shape[0]} but the picture is "
-                           f"{size[0]}x{size[1]}: draw it on the picture as stored")  # fmt: skip
+        raise InvalidInput(
+            f"mask for {mask.asset_id} is {image.shape[1]}x{image.shape[0]} but the picture is "
+            f"{size[0]}x{size[1]}: draw it on the picture as stored"
+        )
 
 
 def _digest(config: Config, refs: list[PictureRef], body: AnalysisRequest, record: list) -> str:
     """What makes two requests the same analysis: the pictures' bytes, masks, ruler, the record's figures it
     uses, settings and code."""
-    settings = [msgspec.to_builtins(config.quality), msgspec.to_builtins(config.reconstruction),
-                msgspec.to_builtins(msgspec.structs.replace(config.analysis, threads=1))]  # fmt: skip
-    parts = [sorted(r.sha256 for r in refs), msgspec.to_builtins(body.masks), msgspec.to_builtins(body.ruler),
-             body.marker_side_mm, record, settings, code_digest()]  # fmt: skip
+    settings = [
+        msgspec.to_builtins(config.quality),
+        msgspec.to_builtins(config.reconstruction),
+        msgspec.to_builtins(msgspec.structs.replace(config.analysis, threads=1)),
+    ]
+    parts = [
+        sorted(r.sha256 for r in refs),
+        msgspec.to_builtins(body.masks),
+        msgspec.to_builtins(body.ruler),
+        body.marker_side_mm,
+        record,
+        settings,
+        code_digest(),
+    ]
     return hashlib.sha256(json.dumps(parts, sort_keys=True).encode()).hexdigest()

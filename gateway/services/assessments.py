@@ -50,13 +50,24 @@ def refresh_assessments(
         version = current.meta.version + 1 if current else 1
         data_json = msgspec.json.encode(result)
         store.insert_version(
-            conn, kind=RecordKind.assessment, record_id=encounter_id, version=version, parent_id=encounter_id,
-            data_json=data_json, created_at=iso(current.meta.created_at) if current else None,
-            updated_by=principal.username, device_id=principal.device_id,
-        )  # fmt: skip
+            conn,
+            kind=RecordKind.assessment,
+            record_id=encounter_id,
+            version=version,
+            parent_id=encounter_id,
+            data_json=data_json,
+            created_at=iso(current.meta.created_at) if current else None,
+            updated_by=principal.username,
+            device_id=principal.device_id,
+        )
         audit.append(
-            conn, action="assessment.compute", user_id=principal.user_id, device_id=principal.device_id,
-            kind=RecordKind.assessment.value, record_id=encounter_id,
-            before_version=current.meta.version if current else None, after_version=version,
+            conn,
+            action="assessment.compute",
+            user_id=principal.user_id,
+            device_id=principal.device_id,
+            kind=RecordKind.assessment.value,
+            record_id=encounter_id,
+            before_version=current.meta.version if current else None,
+            after_version=version,
             content_hash=store.version_content_hash(data_json.decode(), False, None),
-        )  # fmt: skip
+        )

@@ -34,20 +34,36 @@ _metadata = msgspec.json.Decoder(CaptureMetadata)
 
 def _asset(row) -> Asset:
     return Asset(
-        id=row["id"], encounter_id=row["encounter_id"], kind=AssetKind(row["kind"]),
-        media_type=MediaType(row["media_type"]), sha256=row["sha256"], size_bytes=row["size_bytes"],
-        filename=row["filename"], metadata=_metadata.decode(row["metadata"]),
-        verdict=_verdict.decode(row["verdict"]) if row["verdict"] else None, source_asset_id=row["source_asset_id"],
-        created_at=row["created_at"], created_by=row["created_by"], device_id=row["device_id"],
-    )  # fmt: skip
+        id=row["id"],
+        encounter_id=row["encounter_id"],
+        kind=AssetKind(row["kind"]),
+        media_type=MediaType(row["media_type"]),
+        sha256=row["sha256"],
+        size_bytes=row["size_bytes"],
+        filename=row["filename"],
+        metadata=_metadata.decode(row["metadata"]),
+        verdict=_verdict.decode(row["verdict"]) if row["verdict"] else None,
+        source_asset_id=row["source_asset_id"],
+        created_at=row["created_at"],
+        created_by=row["created_by"],
+        device_id=row["device_id"],
+    )
 
 
 class AssetService:
     def __init__(self, db: Database, config: Config, store: MediaStore):
         self.db, self.config, self.store = db, config, store
 
-    def store_upload(self, principal: Principal, encounter_id: str, part: Path, filename: str, *,
-                     upload_id: str | None = None, expected: str | None = None) -> Asset:  # fmt: skip
+    def store_upload(
+        self,
+        principal: Principal,
+        encounter_id: str,
+        part: Path,
+        filename: str,
+        *,
+        upload_id: str | None = None,
+        expected: str | None = None,
+    ) -> Asset:
         """Check a finished upload and keep it; the same bytes for the same encounter give the same asset.
 
         Everything is checked before the file moves into the store; the asset row and the
@@ -68,8 +84,10 @@ class AssetService:
             sha = sha256_of(part)
         else:
             if size > self.config.uploads.max_photo_bytes:
-                raise PayloadTooLarge(f"a {size // 1024**2} MB photo is over the {self.config.uploads.max_photo_bytes // 1024**2} MB"
-                                      " limit: phones write 2-30 MB; send the camera's original, not a scan")  # fmt: skip
+                raise PayloadTooLarge(
+                    f"a {size // 1024**2} MB photo is over the {self.config.uploads.max_photo_bytes // 1024**2} MB"
+                    " limit: phones write 2-30 MB; send the camera's original, not a scan"
+                )
             data = part.read_bytes()
             metadata, kind = check_photo(data, media_type, self.config.quality.max_pixels), AssetKind.photo
             verdict = gate_bytes(data, self.config.quality, name=filename)
@@ -78,20 +96,44 @@ class AssetService:
         new_blob = not self.store.blob(sha).exists()
         final = self.store.promote(part, sha)
         try:
-            return self._insert(principal, encounter_id, kind, media_type, sha, size, filename, metadata, verdict, None,
-                                upload_id=upload_id)  # fmt: skip
+            return self._insert(
+                principal,
+                encounter_id,
+                kind,
+                media_type,
+                sha,
+                size,
+                filename,
+                metadata,
+                verdict,
+                None,
+                upload_id=upload_id,
+            )
         except BaseException:
             if new_blob:
                 os.replace(final, part)  # back where it was: the upload can still be completed later
             raise
 
-    def _insert(self, principal: Principal, encounter_id: str, kind: AssetKind, media_type: MediaType, sha: str,
-                size: int, filename: str, metadata: CaptureMetadata, verdict: QualityVerdict | None,
-                source_asset_id: str | None, *, upload_id: str | None = None) -> Asset:  # fmt: skip
+    def _insert(
+        self,
+        principal: Principal,
+        encounter_id: str,
+        kind: AssetKind,
+        media_type: MediaType,
+        sha: str,
+        size: int,
+        filename: str,
+        metadata: CaptureMetadata,
+        verdict: QualityVerdict | None,
+        source_asset_id: str | None,
+        *,
+        upload_id: str | None = None,
+    ) -> Asset:
         with self.db.write() as conn:
             require_live_encounter(conn, encounter_id)
-            asset_id = insert_asset_row(conn, principal, encounter_id, kind, media_type, sha, size, filename, metadata,
-                                        verdict, source_asset_id)  # fmt: skip
+            asset_id = insert_asset_row(
+                conn, principal, encounter_id, kind, media_type, sha, size, filename, metadata, verdict, source_asset_id
+            )
             _mark_upload_complete(conn, upload_id, asset_id)
             return _asset(conn.execute("SELECT * FROM assets WHERE id = ?", (asset_id,)).fetchone())
 
@@ -128,8 +170,10 @@ class AssetService:
 
 def _mark_upload_complete(conn, upload_id: str | None, asset_id: str) -> None:
     if upload_id is not None:
-        conn.execute("UPDATE uploads SET state = 'complete', asset_id = ?, error = NULL WHERE id = ? AND state = 'open'",
-                     (asset_id, upload_id))  # fmt: skip
+        conn.execute(
+            "UPDATE uploads SET state = 'complete', asset_id = ?, error = NULL WHERE id = ? AND state = 'open'",
+            (asset_id, upload_id),
+        )
 
 
 def _check_whole_file(expected: str | None, sha256_hex: str) -> None:
@@ -148,9 +192,19 @@ def _check_whole_file(expected: str | None, sha256_hex: str) -> None:
         raise ChecksumMismatch("the file received does not match the checksum the phone sent for it: upload it again")
 
 
-def insert_asset_row(conn, principal: Principal, encounter_id: str, kind: AssetKind, media_type: MediaType, sha: str,
-                     size: int, filename: str, metadata: CaptureMetadata, verdict: QualityVerdict | None,
-                     source_asset_id: str | None) -> str:  # fmt: skip
+def insert_asset_row(
+    conn,
+    principal: Principal,
+    encounter_id: str,
+    kind: AssetKind,
+    media_type: MediaType,
+    sha: str,
+    size: int,
+    filename: str,
+    metadata: CaptureMetadata,
+    verdict: QualityVerdict | None,
+    source_asset_id: str | None,
+) -> str:
     """One asset row and its audit entry, inside the caller's transaction; returns its id.
 
     The same bytes already stored for this encounter (a retry, two uploads finishing together,
@@ -165,10 +219,29 @@ def insert_asset_row(conn, principal: Principal, encounter_id: str, kind: AssetK
     conn.execute(
         "INSERT INTO assets (id, encounter_id, kind, media_type, sha256, size_bytes, filename, metadata, verdict,"
         " source_asset_id, created_at, created_by, device_id) VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?)",
-        (asset_id, encounter_id, kind.value, media_type.value, sha, size, filename,
-         msgspec.json.encode(metadata).decode(), msgspec.json.encode(verdict).decode() if verdict else None,
-         source_asset_id, iso(utcnow()), principal.username, principal.device_id),
-    )  # fmt: skip
-    audit.append(conn, action="asset.create", user_id=principal.user_id, device_id=principal.device_id, kind="asset",
-                 record_id=asset_id, detail=json.dumps({"sha256": sha, "encounter": encounter_id}))  # fmt: skip
+        (
+            asset_id,
+            encounter_id,
+            kind.value,
+            media_type.value,
+            sha,
+            size,
+            filename,
+            msgspec.json.encode(metadata).decode(),
+            msgspec.json.encode(verdict).decode() if verdict else None,
+            source_asset_id,
+            iso(utcnow()),
+            principal.username,
+            principal.device_id,
+        ),
+    )
+    audit.append(
+        conn,
+        action="asset.create",
+        user_id=principal.user_id,
+        device_id=principal.device_id,
+        kind="asset",
+        record_id=asset_id,
+        detail=json.dumps({"sha256": sha, "encounter": encounter_id}),
+    )
     return asset_id

@@ -124,15 +124,29 @@ class FrameService:
 
 
 def _set_done(conn: sqlite3.Connection, video_id: str, error: str | None) -> None:
-    conn.execute("UPDATE assets SET frames_done_at = ?, frames_error = ? WHERE id = ? AND frames_done_at IS NULL",
-                 (iso(utcnow()), error, video_id))  # fmt: skip
+    conn.execute(
+        "UPDATE assets SET frames_done_at = ?, frames_error = ? WHERE id = ? AND frames_done_at IS NULL",
+        (iso(utcnow()), error, video_id),
+    )
 
 
 def _insert_frame(conn: sqlite3.Connection, video: Asset, sha: str, frame: ExtractedFrame) -> str:
     """One frame's asset row and audit entry, linked to its video; returns its id."""
     name = f"{video.filename}@{frame.time_s:.3f}s.jpg"
     verdict = msgspec.structs.replace(frame.verdict, file=name)
-    metadata = CaptureMetadata(captured_at=video.metadata.captured_at, width=frame.verdict.figures.width,
-                               height=frame.verdict.figures.height)  # fmt: skip
-    return insert_asset_row(conn, GATEWAY, video.encounter_id, AssetKind.frame, MediaType.jpeg, sha, len(frame.jpeg),
-                            name, metadata, verdict, video.id)  # fmt: skip
+    metadata = CaptureMetadata(
+        captured_at=video.metadata.captured_at, width=frame.verdict.figures.width, height=frame.verdict.figures.height
+    )
+    return insert_asset_row(
+        conn,
+        GATEWAY,
+        video.encounter_id,
+        AssetKind.frame,
+        MediaType.jpeg,
+        sha,
+        len(frame.jpeg),
+        name,
+        metadata,
+        verdict,
+        video.id,
+    )

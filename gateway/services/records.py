@@ -53,13 +53,22 @@ class RecordService:
         require_read(principal, kind)
         return store.history(self.db.connection(), kind, record_id)
 
-    def list_records(self, principal: Principal, kind: RecordKind, *, parent_id: str | None = None,
-                     include_deleted: bool = False, limit: int = 100, offset: int = 0) -> list[Record]:  # fmt: skip
+    def list_records(
+        self,
+        principal: Principal,
+        kind: RecordKind,
+        *,
+        parent_id: str | None = None,
+        include_deleted: bool = False,
+        limit: int = 100,
+        offset: int = 0,
+    ) -> list[Record]:
         require_read(principal, kind)
         if limit is not None:
             limit = min(limit, self.config.gateway.page_max)
-        return store.list_heads(self.db.connection(), kind, parent_id=parent_id, include_deleted=include_deleted,
-                                limit=limit, offset=offset)  # fmt: skip
+        return store.list_heads(
+            self.db.connection(), kind, parent_id=parent_id, include_deleted=include_deleted, limit=limit, offset=offset
+        )
 
     def encounter_record(self, principal: Principal, encounter_id: str) -> EncounterRecord:
         require_read(principal, RecordKind.encounter)
@@ -96,8 +105,9 @@ class RecordService:
             return store.get_head(conn, RecordKind.assessment, encounter_id)
 
     # the same writes inside a caller's transaction (used by sync push) ----------------
-    def create_in(self, conn: sqlite3.Connection, principal: Principal, kind: RecordKind, record_id: str,
-                  data: object) -> WriteOutcome:  # fmt: skip
+    def create_in(
+        self, conn: sqlite3.Connection, principal: Principal, kind: RecordKind, record_id: str, data: object
+    ) -> WriteOutcome:
         require_write(principal, kind)
         struct = validation.to_struct(kind, data)
         parent_id = validation.check(conn, kind, record_id, struct, self.config)
@@ -118,8 +128,15 @@ class RecordService:
         self._refresh_results(conn, principal, kind, record_id)
         return WriteOutcome(record, created=True)
 
-    def update_in(self, conn: sqlite3.Connection, principal: Principal, kind: RecordKind, record_id: str,
-                  data: object, if_match: int) -> WriteOutcome:  # fmt: skip
+    def update_in(
+        self,
+        conn: sqlite3.Connection,
+        principal: Principal,
+        kind: RecordKind,
+        record_id: str,
+        data: object,
+        if_match: int,
+    ) -> WriteOutcome:
         """Update to a new version; on a withdrawn record, If-Match of the withdrawn version restores it."""
         require_write(principal, kind)
         struct = validation.to_struct(kind, data)
@@ -131,8 +148,12 @@ class RecordService:
         same_content = _same_content(current, data_json)
         if current.meta.version != if_match:
             # A retry of the write that made the current version: answer as if it had just succeeded.
-            if (same_content and not current.meta.deleted and if_match == current.meta.version - 1
-                    and current.meta.updated_by == principal.username):  # fmt: skip
+            if (
+                same_content
+                and not current.meta.deleted
+                and if_match == current.meta.version - 1
+                and current.meta.updated_by == principal.username
+            ):
                 return WriteOutcome(current, replayed=True)
             raise VersionMismatch(
                 f"you edited version {if_match} but the record is now at version {current.meta.version}:"
@@ -142,13 +163,21 @@ class RecordService:
         if same_content and not current.meta.deleted:
             return WriteOutcome(current, replayed=True)
         action = "record.restore" if current.meta.deleted else "record.update"
-        record = self._write_version(conn, principal, kind, record_id, current.meta.version + 1, parent_id, data_json,
-                                     current, action)  # fmt: skip
+        record = self._write_version(
+            conn, principal, kind, record_id, current.meta.version + 1, parent_id, data_json, current, action
+        )
         self._refresh_results(conn, principal, kind, record_id)
         return WriteOutcome(record)
 
-    def delete_in(self, conn: sqlite3.Connection, principal: Principal, kind: RecordKind, record_id: str,
-                  if_match: int, reason: str) -> WriteOutcome:  # fmt: skip
+    def delete_in(
+        self,
+        conn: sqlite3.Connection,
+        principal: Principal,
+        kind: RecordKind,
+        record_id: str,
+        if_match: int,
+        reason: str,
+    ) -> WriteOutcome:
         require_delete(principal, kind)
         if not reason.strip():
             raise InvalidInput("say why the record is withdrawn (reason)")
@@ -160,26 +189,62 @@ class RecordService:
                 f"you withdrew version {if_match} but the record is now at version {current.meta.version}",
                 current=current,
             )
-        record = self._write_version(conn, principal, kind, record_id, current.meta.version + 1, _parent_of(current),
-                                     _encode(current.data), current, "record.delete", reason=reason)  # fmt: skip
+        record = self._write_version(
+            conn,
+            principal,
+            kind,
+            record_id,
+            current.meta.version + 1,
+            _parent_of(current),
+            _encode(current.data),
+            current,
+            "record.delete",
+            reason=reason,
+        )
         if kind in ENCOUNTER_PARTS:
             self._refresh_results(conn, principal, kind, record_id)
         return WriteOutcome(record)
 
-    def _write_version(self, conn, principal: Principal, kind: RecordKind, record_id: str, version: int,
-                       parent_id: str | None, data_json: bytes, current: Record | None, action: str, *,
-                       reason: str | None = None) -> Record:  # fmt: skip
+    def _write_version(
+        self,
+        conn,
+        principal: Principal,
+        kind: RecordKind,
+        record_id: str,
+        version: int,
+        parent_id: str | None,
+        data_json: bytes,
+        current: Record | None,
+        action: str,
+        *,
+        reason: str | None = None,
+    ) -> Record:
         deleted = reason is not None
         record = store.insert_version(
-            conn, kind=kind, record_id=record_id, version=version, parent_id=parent_id, data_json=data_json,
-            created_at=iso(current.meta.created_at) if current else None, updated_by=principal.username,
-            device_id=principal.device_id, deleted=deleted, delete_reason=reason,
-        )  # fmt: skip
+            conn,
+            kind=kind,
+            record_id=record_id,
+            version=version,
+            parent_id=parent_id,
+            data_json=data_json,
+            created_at=iso(current.meta.created_at) if current else None,
+            updated_by=principal.username,
+            device_id=principal.device_id,
+            deleted=deleted,
+            delete_reason=reason,
+        )
         audit.append(
-            conn, action=action, user_id=principal.user_id, device_id=principal.device_id, kind=kind.value,
-            record_id=record_id, before_version=current.meta.version if current else None, after_version=version,
-            detail=reason or "", content_hash=store.version_content_hash(data_json.decode(), deleted, reason),
-        )  # fmt: skip
+            conn,
+            action=action,
+            user_id=principal.user_id,
+            device_id=principal.device_id,
+            kind=kind.value,
+            record_id=record_id,
+            before_version=current.meta.version if current else None,
+            after_version=version,
+            detail=reason or "",
+            content_hash=store.version_content_hash(data_json.decode(), deleted, reason),
+        )
         return record
 
     def _refresh_results(self, conn, principal: Principal, kind: RecordKind, record_id: str) -> None:

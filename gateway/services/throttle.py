@@ -32,8 +32,9 @@ class LoginThrottle:
             for row in rows.values():
                 if row and row["locked_until"] and dt.datetime.fromisoformat(row["locked_until"]) > now:
                     wait = math.ceil((dt.datetime.fromisoformat(row["locked_until"]) - now).total_seconds())
-                    raise TooManyAttempts(f"too many failed attempts: wait {wait} s before trying again",
-                                          retry_after_s=wait)  # fmt: skip
+                    raise TooManyAttempts(
+                        f"too many failed attempts: wait {wait} s before trying again", retry_after_s=wait
+                    )
             for key, row in rows.items():
                 self._count(conn, key, row, now)
 

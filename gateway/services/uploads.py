@@ -106,15 +106,27 @@ class UploadService:
             require_live_encounter(conn, encounter_id)
             open_rows = conn.execute("SELECT id, length, created_by FROM uploads WHERE state = 'open'").fetchall()
             if sum(r["created_by"] == principal.user_id for r in open_rows) >= limits.max_open_per_user:
-                raise TooManyAttempts(f"you have {limits.max_open_per_user} unfinished uploads: finish or cancel some first",
-                                      retry_after_s=60)  # fmt: skip
+                raise TooManyAttempts(
+                    f"you have {limits.max_open_per_user} unfinished uploads: finish or cancel some first",
+                    retry_after_s=60,
+                )
             self._check_disk(open_rows, length)
             conn.execute(
                 "INSERT INTO uploads (id, encounter_id, length, metadata, filename, state, created_by, device_id,"
                 " created_at, expires_at) VALUES (?,?,?,?,?,?,?,?,?,?)",
-                (upload_id, encounter_id, length, json.dumps(metadata), filename, UploadPhase.open.value,
-                 principal.user_id, principal.device_id, iso(now), iso(now + dt.timedelta(seconds=limits.expiry_s))),
-            )  # fmt: skip
+                (
+                    upload_id,
+                    encounter_id,
+                    length,
+                    json.dumps(metadata),
+                    filename,
+                    UploadPhase.open.value,
+                    principal.user_id,
+                    principal.device_id,
+                    iso(now),
+                    iso(now + dt.timedelta(seconds=limits.expiry_s)),
+                ),
+            )
             self.store.create_part(upload_id)
         return self._state(self._row(upload_id))
 
@@ -159,8 +171,14 @@ class UploadService:
         row = self._row(upload_id)
         part = self.store.part(upload_id)
         try:
-            return self.assets.store_upload(principal, row["encounter_id"], part, row["filename"], upload_id=upload_id,
-                                            expected=json.loads(row["metadata"]).get("checksum"))  # fmt: skip
+            return self.assets.store_upload(
+                principal,
+                row["encounter_id"],
+                part,
+                row["filename"],
+                upload_id=upload_id,
+                expected=json.loads(row["metadata"]).get("checksum"),
+            )
         except StorageError:
             raise  # the database was busy: the file stays, and housekeeping completes it later
         except BurnedgeError as exc:
@@ -248,13 +266,22 @@ class UploadService:
     def _state(self, row) -> UploadState:
         phase = UploadPhase(row["state"])
         offset = row["length"] if phase is UploadPhase.complete else self._held(row["id"])
-        return UploadState(id=row["id"], encounter_id=row["encounter_id"], length=row["length"], offset=offset,
-                           metadata=json.loads(row["metadata"]), expires_at=dt.datetime.fromisoformat(row["expires_at"]),
-                           phase=phase, asset_id=row["asset_id"])  # fmt: skip
+        return UploadState(
+            id=row["id"],
+            encounter_id=row["encounter_id"],
+            length=row["length"],
+            offset=offset,
+            metadata=json.loads(row["metadata"]),
+            expires_at=dt.datetime.fromisoformat(row["expires_at"]),
+            phase=phase,
+            asset_id=row["asset_id"],
+        )
 
     def _finish(self, upload_id: str, phase: UploadPhase, *, error: str | None = None) -> bool:
         """Move an open upload to its end state; False if it had already ended another way."""
         with self.db.write() as conn:
-            cur = conn.execute("UPDATE uploads SET state = ?, error = ? WHERE id = ? AND state = 'open'",
-                               (phase.value, error, upload_id))  # fmt: skip
+            cur = conn.execute(
+                "UPDATE uploads SET state = ?, error = ? WHERE id = ? AND state = 'open'",
+                (phase.value, error, upload_id),
+            )
             return cur.rowcount == 1

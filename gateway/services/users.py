@@ -21,10 +21,14 @@ from schemas.ids import uuid7
 
 def user_from_row(row) -> User:
     return User(
-        id=row["id"], username=row["username"], role=Role(row["role"]), display_name=row["display_name"],
-        active=bool(row["active"]), created_at=dt.datetime.fromisoformat(row["created_at"]),
+        id=row["id"],
+        username=row["username"],
+        role=Role(row["role"]),
+        display_name=row["display_name"],
+        active=bool(row["active"]),
+        created_at=dt.datetime.fromisoformat(row["created_at"]),
         must_change_password=bool(row["must_change_password"]),
-    )  # fmt: skip
+    )
 
 
 def _who(actor: Principal | None) -> dict:
@@ -60,8 +64,14 @@ class UserCare:
                 " VALUES (?,?,?,?,?,1,?)",
                 (user_id, body.username, password_hash, body.role.value, body.display_name, iso(utcnow())),
             )
-            audit.append(conn, action="user.create", **_who(actor), kind="user", record_id=user_id,
-                         detail=f"{body.username} as {body.role.value}")  # fmt: skip
+            audit.append(
+                conn,
+                action="user.create",
+                **_who(actor),
+                kind="user",
+                record_id=user_id,
+                detail=f"{body.username} as {body.role.value}",
+            )
             return user_from_row(_row(conn, user_id))
 
     def set_active(self, actor: Principal | None, user_id: str, active: bool) -> User:
@@ -73,16 +83,25 @@ class UserCare:
         with self.db.write() as conn:
             row = _row(conn, user_id)
             if not active and row["active"] and row["role"] == Role.admin.value:
-                others = conn.execute("SELECT COUNT(*) FROM users WHERE role = ? AND active = 1 AND id != ?",
-                                      (Role.admin.value, user_id)).fetchone()[0]  # fmt: skip
+                others = conn.execute(
+                    "SELECT COUNT(*) FROM users WHERE role = ? AND active = 1 AND id != ?", (Role.admin.value, user_id)
+                ).fetchone()[0]
                 if not others:
-                    raise Conflict(f"{row['username']} is the last active administrator: create or enable another "
-                                   "administrator first, or nobody could manage accounts")  # fmt: skip
+                    raise Conflict(
+                        f"{row['username']} is the last active administrator: create or enable another "
+                        "administrator first, or nobody could manage accounts"
+                    )
             conn.execute("UPDATE users SET active = ? WHERE id = ?", (int(active), user_id))
             if not active:
                 _end_sessions(conn, user_id)
-            audit.append(conn, action="user.enable" if active else "user.disable", **_who(actor), kind="user",
-                         record_id=user_id, detail=row["username"])  # fmt: skip
+            audit.append(
+                conn,
+                action="user.enable" if active else "user.disable",
+                **_who(actor),
+                kind="user",
+                record_id=user_id,
+                detail=row["username"],
+            )
             return user_from_row(_row(conn, user_id))
 
     def list_users(self, actor: Principal | None) -> list[User]:
@@ -102,17 +121,26 @@ class UserCare:
         if actor is not None:
             require_admin(actor, "manage_users")
             if user_id == actor.user_id:
-                raise Conflict("to change your own password use POST /api/v1/auth/password (it asks for the current "
-                               "one)")  # fmt: skip
+                raise Conflict(
+                    "to change your own password use POST /api/v1/auth/password (it asks for the current one)"
+                )
         password_hash = self._hash(password)
         with self.db.write() as conn:
             row = _row(conn, user_id)
-            conn.execute("UPDATE users SET password_hash = ?, must_change_password = ? WHERE id = ?",
-                         (password_hash, int(temporary), user_id))  # fmt: skip
+            conn.execute(
+                "UPDATE users SET password_hash = ?, must_change_password = ? WHERE id = ?",
+                (password_hash, int(temporary), user_id),
+            )
             ended = _end_sessions(conn, user_id)
             must = "; must change it at next sign-in" if temporary else ""
-            audit.append(conn, action="user.password_reset", **_who(actor), kind="user", record_id=user_id,
-                         detail=f"{row['username']}{must}; {ended} sessions ended")  # fmt: skip
+            audit.append(
+                conn,
+                action="user.password_reset",
+                **_who(actor),
+                kind="user",
+                record_id=user_id,
+                detail=f"{row['username']}{must}; {ended} sessions ended",
+            )
             return user_from_row(_row(conn, user_id))
 
     def change_password(self, principal: Principal, body: PasswordChange) -> User:
@@ -122,17 +150,31 @@ class UserCare:
         row = self.db.connection().execute("SELECT * FROM users WHERE id = ?", (principal.user_id,)).fetchone()
         if row is None or not self._password_ok(row, body.current_password):
             with self.db.write() as conn:
-                audit.append(conn, action="auth.failed", **_who(principal), kind="user", record_id=principal.user_id,
-                             detail="wrong current password on a password change")  # fmt: skip
+                audit.append(
+                    conn,
+                    action="auth.failed",
+                    **_who(principal),
+                    kind="user",
+                    record_id=principal.user_id,
+                    detail="wrong current password on a password change",
+                )
             raise WrongPassword("the current password is wrong: the password was not changed")
         if body.new_password == body.current_password:
             raise InvalidInput("the new password is the current one: choose another (10+ characters)")
         password_hash = self._hash(body.new_password)
         with self.db.write() as conn:
-            conn.execute("UPDATE users SET password_hash = ?, must_change_password = 0 WHERE id = ?",
-                         (password_hash, principal.user_id))  # fmt: skip
+            conn.execute(
+                "UPDATE users SET password_hash = ?, must_change_password = 0 WHERE id = ?",
+                (password_hash, principal.user_id),
+            )
             ended = _end_sessions(conn, principal.user_id, keep=principal.session_hash)
             self.throttle.succeeded(conn, key, [])
-            audit.append(conn, action="user.password_change", **_who(principal), kind="user",
-                         record_id=principal.user_id, detail=f"{row['username']}; {ended} other sessions ended")  # fmt: skip
+            audit.append(
+                conn,
+                action="user.password_change",
+                **_who(principal),
+                kind="user",
+                record_id=principal.user_id,
+                detail=f"{row['username']}; {ended} other sessions ended",
+            )
             return user_from_row(_row(conn, principal.user_id))

@@ -25,9 +25,19 @@ GENESIS_HASH = "0" * 64
 SERVER_USER = "gateway"
 """`updated_by` of the records the gateway writes itself (analyses, consultations received)."""
 _HASHED_FIELDS = (
-    "seq", "at", "user_id", "device_id", "action", "kind", "record_id",
-    "before_version", "after_version", "detail", "content_hash", "prev_hash",
-)  # fmt: skip
+    "seq",
+    "at",
+    "user_id",
+    "device_id",
+    "action",
+    "kind",
+    "record_id",
+    "before_version",
+    "after_version",
+    "detail",
+    "content_hash",
+    "prev_hash",
+)
 
 
 def entry_hash(fields: dict) -> str:
@@ -72,11 +82,28 @@ def append(
     return AuditEntry(**fields)
 
 
-def insert_server_record(conn: sqlite3.Connection, *, kind: RecordKind, record_id: str, parent_id: str, data: bytes,
-                         action: str, detail: str = "") -> None:  # fmt: skip
+def insert_server_record(
+    conn: sqlite3.Connection,
+    *,
+    kind: RecordKind,
+    record_id: str,
+    parent_id: str,
+    data: bytes,
+    action: str,
+    detail: str = "",
+) -> None:
     """The first version of a record the gateway writes itself, with its audit entry; inside a write transaction."""
-    insert_version(conn, kind=kind, record_id=record_id, version=1, parent_id=parent_id, data_json=data,
-                   created_at=None, updated_by=SERVER_USER, device_id=None)  # fmt: skip
+    insert_version(
+        conn,
+        kind=kind,
+        record_id=record_id,
+        version=1,
+        parent_id=parent_id,
+        data_json=data,
+        created_at=None,
+        updated_by=SERVER_USER,
+        device_id=None,
+    )
     append(
         conn,
         action=action,
@@ -148,9 +175,12 @@ def verify(conn: sqlite3.Connection, anchor: AuditAnchor | None = None) -> Audit
         seq, reason = problem
         return AuditVerification(ok=False, entries=count, first_broken_seq=seq or None, reason=reason)
     anchored = f"; reaches the burn center's anchor (entry {anchor.head.seq}, {anchor.anchored_at})" if anchor else ""
-    return AuditVerification(ok=True, entries=count, first_broken_seq=None,
-                             reason=f"all {count} entries intact; every record served is its newest audited version"
-                             f"{anchored}")  # fmt: skip
+    return AuditVerification(
+        ok=True,
+        entries=count,
+        first_broken_seq=None,
+        reason=f"all {count} entries intact; every record served is its newest audited version{anchored}",
+    )
 
 
 def _head_problem(conn: sqlite3.Connection, newest: dict[tuple[str, str], tuple[int, int]]) -> tuple[int, str] | None:
@@ -171,8 +201,10 @@ def _head_problem(conn: sqlite3.Connection, newest: dict[tuple[str, str], tuple[
             return seq, f"{what} is served from a version row that is missing or belongs to another record"
         if row["version"] != version:
             change = "rolled back to" if row["version"] < version else "moved to unaudited"
-            return seq, (f"{what} is served at version {row['version']}, but entry {seq} recorded version {version} "
-                         f"as its newest: the record was {change} version {row['version']}")  # fmt: skip
+            return seq, (
+                f"{what} is served at version {row['version']}, but entry {seq} recorded version {version} "
+                f"as its newest: the record was {change} version {row['version']}"
+            )
         if bool(row["head_deleted"]) != bool(row["deleted"]):
             return seq, f"{what}: its withdrawn flag does not match its newest version"
     if unseen:
@@ -184,11 +216,15 @@ def _head_problem(conn: sqlite3.Connection, newest: dict[tuple[str, str], tuple[
 def _anchor_problem(conn: sqlite3.Connection, anchor: AuditAnchor, count: int) -> str | None:
     seq, when = anchor.head.seq, anchor.anchored_at
     if count < seq:
-        return (f"the chain ends at entry {count}, but burn center {anchor.center_id} anchored entry {seq} on {when}: "
-                f"entries {count + 1} to {seq} were removed, or the database was replaced by an older copy")  # fmt: skip
+        return (
+            f"the chain ends at entry {count}, but burn center {anchor.center_id} anchored entry {seq} on {when}: "
+            f"entries {count + 1} to {seq} were removed, or the database was replaced by an older copy"
+        )
     if hash_at(conn, seq) != anchor.head.hash:
-        return (f"entry {seq} is not the one burn center {anchor.center_id} anchored on {when}: the chain up to it "
-                "was rewritten")  # fmt: skip
+        return (
+            f"entry {seq} is not the one burn center {anchor.center_id} anchored on {when}: the chain up to it "
+            "was rewritten"
+        )
     return None
 
 

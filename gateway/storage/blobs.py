@@ -18,8 +18,11 @@ CHUNK = 1024 * 1024
 
 def media_root(config) -> Path:
     """Where the gateway keeps media: [uploads] data_dir, or "burnedge-media" beside the database."""
-    return Path(config.uploads.data_dir) if config.uploads.data_dir else Path(config.gateway.database).parent / \
-        "burnedge-media"  # fmt: skip
+    return (
+        Path(config.uploads.data_dir)
+        if config.uploads.data_dir
+        else Path(config.gateway.database).parent / "burnedge-media"
+    )
 
 
 class MediaStore:

@@ -87,10 +87,19 @@ def insert_version(
         "INSERT INTO record_versions (kind, id, version, parent_id, data, deleted, delete_reason,"
         " created_at, updated_at, updated_by, device_id) VALUES (?,?,?,?,?,?,?,?,?,?,?)",
         (
-            kind.value, record_id, version, parent_id, data_json.decode("utf-8"), int(deleted),
-            delete_reason, created_at or now, now, updated_by, device_id,
+            kind.value,
+            record_id,
+            version,
+            parent_id,
+            data_json.decode("utf-8"),
+            int(deleted),
+            delete_reason,
+            created_at or now,
+            now,
+            updated_by,
+            device_id,
         ),
-    )  # fmt: skip
+    )
     conn.execute(
         "INSERT INTO record_heads (kind, id, seq, parent_id, deleted) VALUES (?,?,?,?,?)"
         " ON CONFLICT (kind, id) DO UPDATE SET seq = excluded.seq, parent_id = excluded.parent_id,"

@@ -228,12 +228,21 @@ def perimeter_mm(loops: list[Polyline], smoothing_mm: float = SMOOTHING_MM, step
         raise InvalidInput(f"smoothing_mm must be >= 0 and step_mm > 0, got {smoothing_mm} and {step_mm}")
     lengths = np.array([_length(smooth_polyline(p, smoothing_mm, step_mm)) for p in loops])
     total = float(lengths.sum())
-    small = np.array([lengths[i] < SMALL_SHARE * total or (p.closed and enclosed_area(p.points) < SMALL_AREA_MM2)
-                      for i, p in enumerate(loops)], dtype=bool)  # fmt: skip
+    small = np.array(
+        [
+            lengths[i] < SMALL_SHARE * total or (p.closed and enclosed_area(p.points) < SMALL_AREA_MM2)
+            for i, p in enumerate(loops)
+        ],
+        dtype=bool,
+    )
     main = lengths[~small]
-    return Perimeter(perimeter_mm=float(main.sum()), n_loops=int(main.size),
-                     largest_loop_mm=float(main.max()) if main.size else 0.0,
-                     small_loops_mm=float(lengths[small].sum()), n_small_loops=int(small.sum()))  # fmt: skip
+    return Perimeter(
+        perimeter_mm=float(main.sum()),
+        n_loops=int(main.size),
+        largest_loop_mm=float(main.max()) if main.size else 0.0,
+        small_loops_mm=float(lengths[small].sum()),
+        n_small_loops=int(small.sum()),
+    )
 
 
 def enclosed_area(points: np.ndarray) -> float:

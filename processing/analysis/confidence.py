@@ -30,16 +30,27 @@ CUT_OFF_PENALTY = 2.0
 """The burn reaches the edge of what was reconstructed or looked at: part of it may be missing."""
 
 
-def score(views_used: int, views_seeing_burn: int, inlier_ratio: float, reprojection_px: float, seen3: float,
-          scale_uncertainty_percent: float | None, clinician_masks: int, *, cut_off: bool = False,
-          min_views: int = 3) -> ConfidenceRecord:  # fmt: skip
+def score(
+    views_used: int,
+    views_seeing_burn: int,
+    inlier_ratio: float,
+    reprojection_px: float,
+    seen3: float,
+    scale_uncertainty_percent: float | None,
+    clinician_masks: int,
+    *,
+    cut_off: bool = False,
+    min_views: int = 3,
+) -> ConfidenceRecord:
     unc = scale_uncertainty_percent
     terms = {
-        "seen": B_SEEN * seen3, "inlier": B_INLIER * inlier_ratio, "reprojection": B_REPROJ * reprojection_px,
+        "seen": B_SEEN * seen3,
+        "inlier": B_INLIER * inlier_ratio,
+        "reprojection": B_REPROJ * reprojection_px,
         "views": B_VIEWS * min(views_seeing_burn, 10) / 10,
         "scale": B_SCALE * unc if unc is not None else -UNSCALED_PENALTY - B_SCALE * 0.3,
         "cut_off": -CUT_OFF_PENALTY if cut_off else 0.0,
-    }  # fmt: skip
+    }
     c = 1.0 / (1.0 + math.exp(-(B0 + sum(terms.values()))))
     reasons = []
     if unc is None:
@@ -47,8 +58,10 @@ def score(views_used: int, views_seeing_burn: int, inlier_ratio: float, reprojec
     elif unc > 1.0:
         reasons.append(f"the scale is uncertain (±{unc:.1f} %): keep the marker flat, unfolded and sharp in the photos")
     if seen3 < 0.8:
-        reasons.append(f"only {seen3:.0%} of the burn was seen from {min_views} or more angles: "
-                       "take more photos walking around the burn")  # fmt: skip
+        reasons.append(
+            f"only {seen3:.0%} of the burn was seen from {min_views} or more angles: "
+            "take more photos walking around the burn"
+        )
     if views_seeing_burn < 4:
         reasons.append(f"only {views_seeing_burn} photos show the burn: take at least six from different sides")
     if reprojection_px > 1.2:
@@ -56,21 +69,38 @@ def score(views_used: int, views_seeing_burn: int, inlier_ratio: float, reprojec
     if inlier_ratio < 0.3:
         reasons.append("few features matched between photos: avoid glare and keep the burn in focus")
     if cut_off:
-        reasons.append("the burn reaches the edge of the reconstructed surface: part of it may be missing; "
-                       "take photos that show healthy skin all around it")  # fmt: skip
+        reasons.append(
+            "the burn reaches the edge of the reconstructed surface: part of it may be missing; "
+            "take photos that show healthy skin all around it"
+        )
     level = "high" if c >= 0.8 else "moderate" if c >= 0.5 else "low"
     if level != "high" and not reasons:
         # No single indicator is poor, but together they are: name the weakest against a good capture.
-        good = {"seen": B_SEEN, "inlier": B_INLIER * 0.8, "reprojection": B_REPROJ * 0.5, "views": B_VIEWS,
-                "scale": B_SCALE * 0.3}  # fmt: skip
+        good = {
+            "seen": B_SEEN,
+            "inlier": B_INLIER * 0.8,
+            "reprojection": B_REPROJ * 0.5,
+            "views": B_VIEWS,
+            "scale": B_SCALE * 0.3,
+        }
         weakest = min(good, key=lambda k: terms[k] - good[k])
-        words = {"seen": "parts of the burn were seen from too few angles", "inlier": "features matched poorly",
-                 "reprojection": "the photos fit together loosely", "views": "few photos show the burn",
-                 "scale": "the scale is less certain than usual"}  # fmt: skip
+        words = {
+            "seen": "parts of the burn were seen from too few angles",
+            "inlier": "features matched poorly",
+            "reprojection": "the photos fit together loosely",
+            "views": "few photos show the burn",
+            "scale": "the scale is less certain than usual",
+        }
         reasons.append(f"several indicators are middling; the weakest: {words[weakest]}. Retake if you can")
     return ConfidenceRecord(
-        score=round(c, 3), level=level, reasons=reasons, views_used=views_used,
-        views_seeing_burn=views_seeing_burn, inlier_ratio=round(inlier_ratio, 3),
-        reprojection_error_px=round(reprojection_px, 3), burn_seen_by_3_fraction=round(seen3, 3),
-        scale_uncertainty_percent=None if unc is None else round(unc, 3), clinician_masks=clinician_masks,
-    )  # fmt: skip
+        score=round(c, 3),
+        level=level,
+        reasons=reasons,
+        views_used=views_used,
+        views_seeing_burn=views_seeing_burn,
+        inlier_ratio=round(inlier_ratio, 3),
+        reprojection_error_px=round(reprojection_px, 3),
+        burn_seen_by_3_fraction=round(seen3, 3),
+        scale_uncertainty_percent=None if unc is None else round(unc, 3),
+        clinician_masks=clinician_masks,
+    )

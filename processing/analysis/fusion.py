@@ -53,8 +53,9 @@ def log_odds(p: np.ndarray, w: np.ndarray) -> np.ndarray:
     clipped = np.clip(p, LOGIT_EPS, 1.0 - LOGIT_EPS)
     w = np.where(seen, w, 0.0)
     total = w.sum(axis=0)
-    mean = np.divide((w * np.log(clipped / (1.0 - clipped))).sum(axis=0), total, out=np.zeros_like(total),
-                     where=total > 0)  # fmt: skip
+    mean = np.divide(
+        (w * np.log(clipped / (1.0 - clipped))).sum(axis=0), total, out=np.zeros_like(total), where=total > 0
+    )
     return _unseen_nan(1.0 / (1.0 + np.exp(-mean)), seen)
 
 

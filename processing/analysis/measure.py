@@ -74,8 +74,14 @@ def seen_fraction(vertices, faces, q, views_per_vertex, minimum: int) -> float:
     return float(burnt[well_seen].sum() / total) if total > 0 else 0.0
 
 
-def run(conf: AnalysisConfig, surface_npz: Path, mm_per_unit: float | None, units_per_mm: float,
-        views: list[View], out_dir: Path) -> Path:  # fmt: skip
+def run(
+    conf: AnalysisConfig,
+    surface_npz: Path,
+    mm_per_unit: float | None,
+    units_per_mm: float,
+    views: list[View],
+    out_dir: Path,
+) -> Path:
     data = np.load(surface_npz)
     scaled = bool(mm_per_unit)
     to_mm = 1.0 if scaled else 1.0 / units_per_mm  # the mesh is already in mm when scaled
@@ -86,18 +92,28 @@ def run(conf: AnalysisConfig, surface_npz: Path, mm_per_unit: float | None, unit
     mm_views = [View(v.name, v.image_id, v.width, v.height, v.K, v.dist, v.R, v.t * to_mm) for v in views]
     reference, rel, relief_note = None, None, ""
     try:
-        surface = fit_reference(vertices, faces, q, outward_at_burn(mm_views, vertices, q),
-                                ring_inner_mm=conf.ring_inner_mm, ring_outer_mm=conf.ring_outer_mm)  # fmt: skip
+        surface = fit_reference(
+            vertices,
+            faces,
+            q,
+            outward_at_burn(mm_views, vertices, q),
+            ring_inner_mm=conf.ring_inner_mm,
+            ring_outer_mm=conf.ring_outer_mm,
+        )
         rel = relief(vertices, faces, q, surface)
-        reference = ReferenceRecord(kind=surface.kind, ring_points=surface.ring_size,
-                                    ring_rms_mm=round(surface.ring_rms_mm, 3) if scaled else None,
-                                    holdout_mm=round(surface.holdout_mm, 3)
-                                    if scaled and surface.holdout_mm is not None else None)  # fmt: skip
+        reference = ReferenceRecord(
+            kind=surface.kind,
+            ring_points=surface.ring_size,
+            ring_rms_mm=round(surface.ring_rms_mm, 3) if scaled else None,
+            holdout_mm=round(surface.holdout_mm, 3) if scaled and surface.holdout_mm is not None else None,
+        )
         misfit = surface.holdout_mm if surface.holdout_mm is not None else surface.ring_rms_mm
         if scaled and misfit > UNCERTAIN_REFERENCE_MM:
-            relief_note = (f"surface relief and volume are uncertain: the healthy skin around the burn is uneven, and "
-                           f"a smooth surface fitted to part of it misses the rest by {misfit:.1f} mm, so the level "
-                           "the skin would have over the burn is a guess; compare with examination")  # fmt: skip
+            relief_note = (
+                f"surface relief and volume are uncertain: the healthy skin around the burn is uneven, and "
+                f"a smooth surface fitted to part of it misses the rest by {misfit:.1f} mm, so the level "
+                "the skin would have over the burn is a guess; compare with examination"
+            )
     except InvalidInput as exc:  # no healthy ring: the area still stands without relief
         relief_note = f"no surface relief or volume: {exc}"
         log.warning(relief_note)
@@ -110,14 +126,19 @@ def run(conf: AnalysisConfig, surface_npz: Path, mm_per_unit: float | None, unit
         volume_cm3=round(rel.volume_mm3 / 1000, 3) if scaled and rel else None,
         area_model_units2=round(area * units_per_mm**2, 6) if not scaled else None,
         burn_loops=perimeter.n_loops,
-    )  # fmt: skip
+    )
     seen = data["view_sees_burn"] if "view_sees_burn" in data else np.ones(len(views), bool)
     result = Measurement(
-        metrics=metrics, reference=reference,
-        burn_seen_by_3_fraction=round(seen_fraction(vertices, faces, q, data["views_per_vertex"],
-                                                    conf.min_views_for_confidence), 4),
-        views_seeing_burn=int(seen.sum()), open_edges=sum(not loop.closed for loop in loops),
-        burn_at_surface_edge=burn_at_edge(faces, q), perimeter_smoothing_mm=SMOOTHING_MM, relief_note=relief_note,
-    )  # fmt: skip
+        metrics=metrics,
+        reference=reference,
+        burn_seen_by_3_fraction=round(
+            seen_fraction(vertices, faces, q, data["views_per_vertex"], conf.min_views_for_confidence), 4
+        ),
+        views_seeing_burn=int(seen.sum()),
+        open_edges=sum(not loop.closed for loop in loops),
+        burn_at_surface_edge=burn_at_edge(faces, q),
+        perimeter_smoothing_mm=SMOOTHING_MM,
+        relief_note=relief_note,
+    )
     write_json(out_dir / RESULT, msgspec.to_builtins(result))
     return out_dir / RESULT

@@ -54,8 +54,9 @@ def _digest(*parts: object) -> str:
 def _files_digest(folder: Path | None) -> str:
     if folder is None or not folder.is_dir():
         return ""
-    return _digest([(f.name, hashlib.sha256(f.read_bytes()).hexdigest()) for f in sorted(folder.iterdir())
-                    if f.is_file()])  # fmt: skip
+    return _digest(
+        [(f.name, hashlib.sha256(f.read_bytes()).hexdigest()) for f in sorted(folder.iterdir()) if f.is_file()]
+    )
 
 
 def fingerprints(config: Config, out: Path, masks: Path | None) -> dict[str, str]:
@@ -63,8 +64,13 @@ def fingerprints(config: Config, out: Path, masks: Path | None) -> dict[str, str
     under = json.loads((out / reconstruction.FINGERPRINTS).read_text()).get("mesh", "")
     settings = msgspec.to_builtins(msgspec.structs.replace(config.analysis, threads=1))  # threads change nothing
     version = reconstruction.software_versions().get("burnedge", "")
-    segment = _digest(under, settings, version, _files_digest(masks),
-                      hashlib.sha256(model.read_bytes()).hexdigest() if model.is_file() else "")  # fmt: skip
+    segment = _digest(
+        under,
+        settings,
+        version,
+        _files_digest(masks),
+        hashlib.sha256(model.read_bytes()).hexdigest() if model.is_file() else "",
+    )
     surface = _digest(segment)
     return {"segment": segment, "surface": surface, "metrics": _digest(surface)}
 
@@ -82,15 +88,25 @@ def check_request(config: Config, out: Path, masks: Path | None, patient: Patien
             raise InvalidInput(f"--masks {masks} is not a folder")
         m, o = masks.resolve(), out.resolve()
         if m == o or o in m.parents or m in o.parents:
-            raise InvalidInput(f"--masks {masks} lies inside the analysis folder {out} (or holds it): the analysis "
-                               "rewrites its own masks there; copy the corrected masks to a folder of their own")  # fmt: skip
+            raise InvalidInput(
+                f"--masks {masks} lies inside the analysis folder {out} (or holds it): the analysis "
+                "rewrites its own masks there; copy the corrected masks to a folder of their own"
+            )
     if config.analysis.model and not Path(config.analysis.model).is_file():
         raise InvalidInput(f"[analysis] model {config.analysis.model} is not a file")
 
 
-def run(config: Config, source: Path, out: Path, *, masks: Path | None = None, ruler: RulerPoints | None = None,
-        patient: Patient | None = None, gate: bool = True,
-        progress: Callable[[str], None] | None = None) -> AnalysisResult:  # fmt: skip
+def run(
+    config: Config,
+    source: Path,
+    out: Path,
+    *,
+    masks: Path | None = None,
+    ruler: RulerPoints | None = None,
+    patient: Patient | None = None,
+    gate: bool = True,
+    progress: Callable[[str], None] | None = None,
+) -> AnalysisResult:
     """Run (or resume) the whole analysis; the result is also written to OUT/analysis.json.
 
     `progress(stage)` is called as each stage of the reconstruction and of the analysis starts.
@@ -103,14 +119,26 @@ def run(config: Config, source: Path, out: Path, *, masks: Path | None = None, r
     reused = [t.stage for t in report.timings if t.resumed]
 
     def failed(reason: str, code: FailureCode) -> AnalysisResult:
-        return _write(out, AnalysisResult(status=AnalysisStatus.failed, reason=reason, failure=code,
-                                          timings_s=timings, reused_stages=reused,
-                                          hours_since_injury=patient.hours_since_injury, software=report.software))  # fmt: skip
+        return _write(
+            out,
+            AnalysisResult(
+                status=AnalysisStatus.failed,
+                reason=reason,
+                failure=code,
+                timings_s=timings,
+                reused_stages=reused,
+                hours_since_injury=patient.hours_since_injury,
+                software=report.software,
+            ),
+        )
 
     if report.outcome is Outcome.failed:
         return failed(report.reason, report.failure)
-    p = {"segment": out / "segmentation" / segment_views.RECORD, "surface": out / "surface" / surface_map.ARRAYS,
-         "metrics": out / "metrics" / measure.RESULT}  # fmt: skip
+    p = {
+        "segment": out / "segmentation" / segment_views.RECORD,
+        "surface": out / "surface" / surface_map.ARRAYS,
+        "metrics": out / "metrics" / measure.RESULT,
+    }
     stages = Stages(out / FINGERPRINTS, p, fingerprints(config, out, masks), progress)
 
     def stage(name: str, work: Callable[[], object]) -> None:
@@ -126,25 +154,47 @@ def run(config: Config, source: Path, out: Path, *, masks: Path | None = None, r
         views = surface_map.output_views(paths["sfm_model"], paths["scale"])
         aim = np.array(dense.roi_centres[0])  # the point the cameras aim at: the burn
         boxes = surface_map.crop_boxes(views, aim, config.analysis.crop_radius_mm * dense.units_per_mm)
-        stage("segment", lambda: segment_views.run(config.analysis, paths["images"], [v.name for v in views],
-                                                   p["segment"].parent, masks, boxes))  # fmt: skip
-        stage("surface", lambda: surface_map.run(config.analysis, views, paths["mesh_ply"], p["segment"].parent,
-                                                 p["surface"].parent, aim, dense.roi_radii[0]))  # fmt: skip
-        stage("metrics", lambda: measure.run(config.analysis, p["surface"], mm_per_unit, dense.units_per_mm, views,
-                                             p["metrics"].parent))  # fmt: skip
+        stage(
+            "segment",
+            lambda: segment_views.run(
+                config.analysis, paths["images"], [v.name for v in views], p["segment"].parent, masks, boxes
+            ),
+        )
+        stage(
+            "surface",
+            lambda: surface_map.run(
+                config.analysis,
+                views,
+                paths["mesh_ply"],
+                p["segment"].parent,
+                p["surface"].parent,
+                aim,
+                dense.roi_radii[0],
+            ),
+        )
+        stage(
+            "metrics",
+            lambda: measure.run(
+                config.analysis, p["surface"], mm_per_unit, dense.units_per_mm, views, p["metrics"].parent
+            ),
+        )
     except CaptureInsufficient as exc:
         return failed(exc.detail, FailureCode(exc.code))
     except InvalidInput as exc:
         return failed(exc.detail, FailureCode.bad_input)
     except Exception as exc:
-        failed(f"the analysis stopped on an unexpected error ({exc}); the pictures and the reconstruction are kept, "
-               "please report this to your IT contact", FailureCode.internal_error)  # fmt: skip
+        failed(
+            f"the analysis stopped on an unexpected error ({exc}); the pictures and the reconstruction are kept, "
+            "please report this to your IT contact",
+            FailureCode.internal_error,
+        )
         raise
     return _write(out, msgspec.structs.replace(_result(config, report, patient, timings, p), reused_stages=reused))
 
 
-def _result(config: Config, report: ReconstructionReport, patient: Patient, timings: dict[str, float],
-            p: dict[str, Path]) -> AnalysisResult:  # fmt: skip
+def _result(
+    config: Config, report: ReconstructionReport, patient: Patient, timings: dict[str, float], p: dict[str, Path]
+) -> AnalysisResult:
     measured = read_json(p["metrics"], measure.Measurement)
     segmentation = read_json(p["segment"], SegmentationRecord)
     masks = segmentation.views
@@ -153,19 +203,24 @@ def _result(config: Config, report: ReconstructionReport, patient: Patient, timi
     unc = scale.relative_uncertainty * 100 if scaled and scale.relative_uncertainty is not None else None
     cut_views = [m.image for m in masks if m.burn_at_crop_edge]
     conf = confidence.score(
-        views_used=report.sfm.images_registered, views_seeing_burn=measured.views_seeing_burn,
-        inlier_ratio=report.sfm.mean_inlier_ratio, reprojection_px=report.sfm.median_reprojection_error_px,
-        seen3=measured.burn_seen_by_3_fraction, scale_uncertainty_percent=unc if scaled else None,
+        views_used=report.sfm.images_registered,
+        views_seeing_burn=measured.views_seeing_burn,
+        inlier_ratio=report.sfm.mean_inlier_ratio,
+        reprojection_px=report.sfm.median_reprojection_error_px,
+        seen3=measured.burn_seen_by_3_fraction,
+        scale_uncertainty_percent=unc if scaled else None,
         clinician_masks=sum(m.source is not MaskSource.model for m in masks),
         cut_off=measured.open_edges > 0 or measured.burn_at_surface_edge,
         min_views=config.analysis.min_views_for_confidence,
-    )  # fmt: skip
+    )
     notes = []
     if segmentation.unmatched_masks:
         notes.append(f"masks not used, named after no placed picture: {', '.join(segmentation.unmatched_masks)}")
     if cut_views:
-        notes.append(f"the model's burn reaches the edge of the area it looked at in {', '.join(cut_views)}: "
-                     "check the overlays; draw the outline (--masks) if the burn is larger")  # fmt: skip
+        notes.append(
+            f"the model's burn reaches the edge of the area it looked at in {', '.join(cut_views)}: "
+            "check the overlays; draw the outline (--masks) if the burn is larger"
+        )
     if measured.relief_note:
         notes.append(measured.relief_note)
     metrics = measured.metrics
@@ -173,20 +228,36 @@ def _result(config: Config, report: ReconstructionReport, patient: Patient, timi
         bsa_cm2 = mosteller(patient.weight_kg, patient.height_cm).bsa_m2 * 1e4
         metrics = msgspec.structs.replace(metrics, tbsa_percent=round(100 * metrics.area_cm2 / bsa_cm2, 3))
     hours = patient.hours_since_injury
-    artifacts = {**report.artifacts, "analysis_masks": "segmentation/masks", "overlays": "segmentation/overlays",
-                 "painted_mesh": f"surface/{surface_map.GLB}", "metrics": f"metrics/{measure.RESULT}"}  # fmt: skip
+    artifacts = {
+        **report.artifacts,
+        "analysis_masks": "segmentation/masks",
+        "overlays": "segmentation/overlays",
+        "painted_mesh": f"surface/{surface_map.GLB}",
+        "metrics": f"metrics/{measure.RESULT}",
+    }
     return AnalysisResult(
         status=AnalysisStatus.ok if scaled else AnalysisStatus.unscaled,
-        reason=None if scaled else f"no scale ({scale.note if scale else 'none found'}): sizes are not reported "
+        reason=None
+        if scaled
+        else f"no scale ({scale.note if scale else 'none found'}): sizes are not reported "
         "in mm or cm; put the printed marker beside the burn, or mark ruler points",
-        metrics=metrics, confidence=conf,
-        scale=ScaleSummary(method=scale.source.value if scale else "none", mm_per_unit=scale.mm_per_unit if scale else None,
-                           uncertainty_percent=round(unc, 3) if unc is not None else None),
-        timings_s=timings, hours_since_injury=hours,
-        provisional=None if hours is None else hours < config.analysis.provisional_hours, notes=notes,
-        views=masks, fusion_rule=config.analysis.fusion_rule, reference=measured.reference, artifacts=artifacts,
+        metrics=metrics,
+        confidence=conf,
+        scale=ScaleSummary(
+            method=scale.source.value if scale else "none",
+            mm_per_unit=scale.mm_per_unit if scale else None,
+            uncertainty_percent=round(unc, 3) if unc is not None else None,
+        ),
+        timings_s=timings,
+        hours_since_injury=hours,
+        provisional=None if hours is None else hours < config.analysis.provisional_hours,
+        notes=notes,
+        views=masks,
+        fusion_rule=config.analysis.fusion_rule,
+        reference=measured.reference,
+        artifacts=artifacts,
         software=report.software,
-    )  # fmt: skip
+    )
 
 
 def _write(out: Path, result: AnalysisResult) -> AnalysisResult:

@@ -60,9 +60,13 @@ def build_scene(vertices: np.ndarray, faces: np.ndarray) -> o3d.t.geometry.Rayca
 
 
 def sample_view(
-    vertices: np.ndarray, faces: np.ndarray, normals: np.ndarray, view: View, prob: np.ndarray,
+    vertices: np.ndarray,
+    faces: np.ndarray,
+    normals: np.ndarray,
+    view: View,
+    prob: np.ndarray,
     scene: o3d.t.geometry.RaycastingScene | None = None,
-) -> ViewSample:  # fmt: skip
+) -> ViewSample:
     """Probability, weight and visibility of every vertex in one view.
 
     prob is the view's burn probability map (height, width) in [0, 1], in the undistorted picture (same K);
@@ -101,8 +105,9 @@ def sample_views(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Probabilities and weights (n_views, V) of all views, ready for fusion.fuse."""
     if len(views) != len(probs) or not views:
-        raise InvalidInput(f"need one probability map per view and at least one view; got {len(views)} views "
-                           f"and {len(probs)} maps")  # fmt: skip
+        raise InvalidInput(
+            f"need one probability map per view and at least one view; got {len(views)} views and {len(probs)} maps"
+        )
     vertices, faces = check_mesh(vertices, faces)
     normals = vertex_normals(vertices, faces)
     scene = build_scene(vertices, faces)
@@ -111,8 +116,10 @@ def sample_views(
     ]
     w = np.stack([s.weight for s in samples])
     if not np.any(w > 0):
-        raise InvalidInput(f"no mesh vertex is seen by any of the {len(views)} views; check that the cameras and the "
-                           "mesh share one coordinate frame and unit (mm) and that the faces are wound outwards")  # fmt: skip
+        raise InvalidInput(
+            f"no mesh vertex is seen by any of the {len(views)} views; check that the cameras and the "
+            "mesh share one coordinate frame and unit (mm) and that the faces are wound outwards"
+        )
     return np.stack([s.p for s in samples]), w
 
 
@@ -140,8 +147,10 @@ def _unoccluded(scene: o3d.t.geometry.RaycastingScene, centre: np.ndarray, point
 def _check_prob(prob: np.ndarray, view: View) -> np.ndarray:
     prob = np.asarray(prob, dtype=np.float64)
     if prob.shape != (view.height, view.width):
-        raise InvalidInput(f"probability map for view {view.name} has shape {prob.shape}, expected "
-                           f"({view.height}, {view.width}) (height, width) like the picture")  # fmt: skip
+        raise InvalidInput(
+            f"probability map for view {view.name} has shape {prob.shape}, expected "
+            f"({view.height}, {view.width}) (height, width) like the picture"
+        )
     known = prob[np.isfinite(prob)]
     if np.isinf(prob).any() or (known.size and (known.min() < 0 or known.max() > 1)):
         raise InvalidInput(f"probability map for view {view.name} must hold values in [0, 1] (NaN: not looked at)")

@@ -24,7 +24,7 @@ from processing.analysis.burn_region import (
     check_vertex_field,
     clip_above,
     triangle_areas,
-)  # fmt: skip
+)
 from processing.reconstruction.views import View
 from schemas.errors import InvalidInput
 
@@ -115,10 +115,16 @@ def outward_at_burn(views: list[View], vertices: np.ndarray, q: np.ndarray, leve
 
 
 def fit_reference(
-    vertices: np.ndarray, faces: np.ndarray, q: np.ndarray, outward: np.ndarray, *,
-    ring_inner_mm: float = RING_INNER_MM, ring_outer_mm: float = RING_OUTER_MM, level: float = LEVEL,
+    vertices: np.ndarray,
+    faces: np.ndarray,
+    q: np.ndarray,
+    outward: np.ndarray,
+    *,
+    ring_inner_mm: float = RING_INNER_MM,
+    ring_outer_mm: float = RING_OUTER_MM,
+    level: float = LEVEL,
     kind: Literal["auto", "ridged", "quartic", "quadratic", "plane"] = "auto",
-) -> ReferenceSurface:  # fmt: skip
+) -> ReferenceSurface:
     """Robust reference surface through the healthy ring around the burn (see module and constants)."""
     vertices, faces = check_mesh(vertices, faces)
     q = check_vertex_field(q, len(vertices))
@@ -130,20 +136,29 @@ def fit_reference(
     edge = _boundary_points(vertices, faces, q, level)
     ring = healthy_ring(vertices, q, edge, ring_inner_mm, ring_outer_mm, level)
     if len(ring) < 3:
-        raise InvalidInput(f"only {len(ring)} healthy vertices lie {ring_inner_mm:g}-{ring_outer_mm:g} mm from the "
-                           "burn edge; the mesh must reach past the burn on healthy skin")  # fmt: skip
+        raise InvalidInput(
+            f"only {len(ring)} healthy vertices lie {ring_inner_mm:g}-{ring_outer_mm:g} mm from the "
+            "burn edge; the mesh must reach past the burn on healthy skin"
+        )
     origin, axes = _frame(ring, outward)
     loc = (ring - origin) @ axes.T
     centre = (edge.mean(axis=0) - origin) @ axes.T
     wide = len(ring) >= MIN_RING_QUADRATIC and _max_gap_deg(loc[:, :2] - centre[:2]) <= MAX_RING_GAP_DEG
     model, holdout = _choose_model(loc, centre[:2], kind, wide)
     residual = model.height(loc[:, 0], loc[:, 1]) - loc[:, 2]
-    return ReferenceSurface(model=model, origin=origin, axes=axes, ring_size=len(ring),
-                            ring_rms_mm=float(np.sqrt(np.mean(residual**2))), holdout_mm=holdout)  # fmt: skip
+    return ReferenceSurface(
+        model=model,
+        origin=origin,
+        axes=axes,
+        ring_size=len(ring),
+        ring_rms_mm=float(np.sqrt(np.mean(residual**2))),
+        holdout_mm=holdout,
+    )
 
 
-def _choose_model(loc: np.ndarray, centre_xy: np.ndarray, kind: str, wide: bool
-                  ) -> tuple[skin_model.SkinModel, float | None]:  # fmt: skip
+def _choose_model(
+    loc: np.ndarray, centre_xy: np.ndarray, kind: str, wide: bool
+) -> tuple[skin_model.SkinModel, float | None]:
     """The requested model, or for "auto": a plane when the ring is thin or one-sided, else a quadratic or a
     quartic by ring size, replaced by the ridged model when it predicts unseen ring skin clearly better and well."""
     thinned = skin_model.thin(loc)
@@ -176,8 +191,9 @@ def healthy_ring(
     return vertices[keep]
 
 
-def relief(vertices: np.ndarray, faces: np.ndarray, q: np.ndarray, reference: ReferenceSurface,
-           level: float = LEVEL) -> Relief:  # fmt: skip
+def relief(
+    vertices: np.ndarray, faces: np.ndarray, q: np.ndarray, reference: ReferenceSurface, level: float = LEVEL
+) -> Relief:
     """Depth statistics over the burn (q >= level), integrating exactly over the burnt part of every face.
 
     max_mm: largest depth below the reference; mean_mm: area-weighted mean depth (signed); volume_mm3: integral
@@ -195,8 +211,13 @@ def relief(vertices: np.ndarray, faces: np.ndarray, q: np.ndarray, reference: Re
     sunken, _ = clip_above(pieces, pieces[:, :, 3])
     volume = float(np.sum(triangle_areas(sunken[:, :, :3]) * sunken[:, :, 3].mean(axis=1)))
     corner_depths = pieces[:, :, 3]
-    return Relief(max_mm=float(corner_depths.max()), mean_mm=mean, volume_mm3=volume,
-                  raised_max_mm=float(-corner_depths.min()), area_mm2=area)  # fmt: skip
+    return Relief(
+        max_mm=float(corner_depths.max()),
+        mean_mm=mean,
+        volume_mm3=volume,
+        raised_max_mm=float(-corner_depths.min()),
+        area_mm2=area,
+    )
 
 
 def _boundary_points(vertices: np.ndarray, faces: np.ndarray, q: np.ndarray, level: float) -> np.ndarray:

@@ -38,8 +38,10 @@ def person_mask(masks_dir: Path, stem: str, shape: tuple[int, int]) -> tuple[np.
         if mask is None:
             raise InvalidInput(f"{png}: not a readable PNG mask")
         if mask.shape != shape:
-            raise InvalidInput(f"{png}: mask is {mask.shape[1]}x{mask.shape[0]} but the picture is "
-                               f"{shape[1]}x{shape[0]}; draw the mask on the picture as stored")  # fmt: skip
+            raise InvalidInput(
+                f"{png}: mask is {mask.shape[1]}x{mask.shape[0]} but the picture is "
+                f"{shape[1]}x{shape[0]}; draw the mask on the picture as stored"
+            )
         return mask >= 128, MaskSource.clinician_mask
     if outline.exists():
         try:
@@ -92,13 +94,24 @@ def _edge_touched(mask: np.ndarray, box: Box) -> bool:
     mask = labels == 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
     h, w = mask.shape
     y1, x1 = box.y0 + box.side - 1, box.x0 + box.side - 1
-    sides = [(box.y0 > 0, mask[box.y0, box.x0 : x1 + 1]), (y1 < h - 1, mask[y1, box.x0 : x1 + 1]),
-             (box.x0 > 0, mask[box.y0 : y1 + 1, box.x0]), (x1 < w - 1, mask[box.y0 : y1 + 1, x1])]  # fmt: skip
+    sides = [
+        (box.y0 > 0, mask[box.y0, box.x0 : x1 + 1]),
+        (y1 < h - 1, mask[y1, box.x0 : x1 + 1]),
+        (box.x0 > 0, mask[box.y0 : y1 + 1, box.x0]),
+        (x1 < w - 1, mask[box.y0 : y1 + 1, x1]),
+    ]
     return any(inner and line.any() for inner, line in sides)
 
 
-def run(conf: AnalysisConfig, images_dir: Path, pictures: list[str], out_dir: Path, masks_dir: Path | None = None,
-        boxes: dict[str, Box] | None = None, segmenter: BurnSegmenter | None = None) -> Path:  # fmt: skip
+def run(
+    conf: AnalysisConfig,
+    images_dir: Path,
+    pictures: list[str],
+    out_dir: Path,
+    masks_dir: Path | None = None,
+    boxes: dict[str, Box] | None = None,
+    segmenter: BurnSegmenter | None = None,
+) -> Path:
     """Writes the masks, probabilities and overlays into a fresh folder, then puts it in place of out_dir."""
     if masks_dir is not None and not masks_dir.is_dir():
         raise InvalidInput(f"--masks {masks_dir} is not a folder")
@@ -126,8 +139,16 @@ def run(conf: AnalysisConfig, images_dir: Path, pictures: list[str], out_dir: Pa
                 extra |= {"crop": [box.x0, box.y0, box.side], "burn_at_crop_edge": _edge_touched(mask, box)}
         _write(tmp / "masks" / f"{stem}.png", mask.astype(np.uint8) * 255)
         _write(tmp / "overlays" / f"{stem}.jpg", overlay(rgb, mask), cv2.IMWRITE_JPEG_QUALITY, 85)
-        records.append(ViewMask(image=name, source=source, burn_pixels=int(mask.sum()), mask=f"masks/{stem}.png",
-                                overlay=f"overlays/{stem}.jpg", **extra))  # fmt: skip
+        records.append(
+            ViewMask(
+                image=name,
+                source=source,
+                burn_pixels=int(mask.sum()),
+                mask=f"masks/{stem}.png",
+                overlay=f"overlays/{stem}.jpg",
+                **extra,
+            )
+        )
         log.info("segmented %s (%s, %d burn pixels)", name, source.value, records[-1].burn_pixels)
     record = SegmentationRecord(views=records, unmatched_masks=sorted(given - used))
     write_json(tmp / RECORD, msgspec.to_builtins(record))

@@ -69,8 +69,9 @@ def polynomial_design(x: np.ndarray, y: np.ndarray, columns: int = 15) -> np.nda
     return np.stack([x ** (n - j) * y**j for n in range(5) for j in range(n + 1)], axis=-1)[..., :columns]
 
 
-def design(kind: Kind, x: np.ndarray, y: np.ndarray, ridge_deg: float | None = None,
-           knots: np.ndarray | None = None) -> np.ndarray:  # fmt: skip
+def design(
+    kind: Kind, x: np.ndarray, y: np.ndarray, ridge_deg: float | None = None, knots: np.ndarray | None = None
+) -> np.ndarray:
     if kind != "ridged":
         return polynomial_design(x, y, POLY_COLUMNS[kind])
     if ridge_deg is None or knots is None:
@@ -82,20 +83,23 @@ def design(kind: Kind, x: np.ndarray, y: np.ndarray, ridge_deg: float | None = N
     return np.concatenate([polynomial_design(x, y), profile, profile * (v / RIDGE_ALONG_MM)[..., None]], axis=-1)
 
 
-def fit(kind: Kind, loc: np.ndarray, ridge_deg: float | None = None, knots: np.ndarray | None = None,
-        iterations: int = 30) -> SkinModel:  # fmt: skip
+def fit(
+    kind: Kind, loc: np.ndarray, ridge_deg: float | None = None, knots: np.ndarray | None = None, iterations: int = 30
+) -> SkinModel:
     """Huber IRLS of z on the model's design; scale from the MAD of the residuals."""
     matrix = design(kind, loc[:, 0], loc[:, 1], ridge_deg, knots)
     if len(loc) < POLY_COLUMNS.get(kind, 15):
-        raise InvalidInput(f"a {kind} reference needs at least {POLY_COLUMNS.get(kind, 15)} ring vertices, "
-                           f"got {len(loc)}")  # fmt: skip
+        raise InvalidInput(
+            f"a {kind} reference needs at least {POLY_COLUMNS.get(kind, 15)} ring vertices, got {len(loc)}"
+        )
     penalty = _penalty(matrix.shape[1], len(knots), len(loc)) if kind == "ridged" else np.zeros((0, matrix.shape[1]))
     z, weights, fitted = loc[:, 2], np.ones(len(loc)), np.zeros(len(loc))
     for _ in range(iterations):
         root = np.sqrt(weights)
         # lstsq (SVD, minimum norm): the ridged design repeats the quartic's low-order columns, which it tolerates
-        coef, *_ = np.linalg.lstsq(np.vstack([matrix * root[:, None], penalty]),
-                                   np.concatenate([z * root, np.zeros(len(penalty))]), rcond=None)  # fmt: skip
+        coef, *_ = np.linalg.lstsq(
+            np.vstack([matrix * root[:, None], penalty]), np.concatenate([z * root, np.zeros(len(penalty))]), rcond=None
+        )
         new_fitted = matrix @ coef
         residual = z - new_fitted
         scale = max(1.4826 * float(np.median(np.abs(residual - np.median(residual)))), MIN_SCALE_MM)
@@ -111,8 +115,10 @@ def fit_ridged(loc: np.ndarray) -> SkinModel:
     """The ridged model in the direction that explains the ring best: a coarse then a fine search of the ridge
     direction by penalised least squares, then the robust fit."""
     if len(loc) < MIN_RIDGED_POINTS:
-        raise InvalidInput(f"a ridged reference needs at least {MIN_RIDGED_POINTS} ring points on a "
-                           f"{THIN_CELL_MM:g} mm grid, got {len(loc)}; use a quartic or smaller one")  # fmt: skip
+        raise InvalidInput(
+            f"a ridged reference needs at least {MIN_RIDGED_POINTS} ring points on a "
+            f"{THIN_CELL_MM:g} mm grid, got {len(loc)}; use a quartic or smaller one"
+        )
     reach = float(np.abs(loc[:, :2]).max()) * math.sqrt(2) + 2 * RIDGE_KNOT_MM
     knots = np.arange(-reach, reach + RIDGE_KNOT_MM, RIDGE_KNOT_MM)
 

@@ -97,8 +97,15 @@ def stray_regions(vertices: np.ndarray, faces: np.ndarray, q: np.ndarray) -> np.
     return burn & (area[label] < STRAY_SHARE * area.max())
 
 
-def run(conf: AnalysisConfig, views: list[View], mesh_ply: Path, seg_dir: Path, out_dir: Path, aim: np.ndarray,
-        radius: float) -> Path:  # fmt: skip
+def run(
+    conf: AnalysisConfig,
+    views: list[View],
+    mesh_ply: Path,
+    seg_dir: Path,
+    out_dir: Path,
+    aim: np.ndarray,
+    radius: float,
+) -> Path:
     """`views` are the placed cameras in the mesh's frame (output_views). `aim` and `radius` bound where the burn can be: the region around the point the cameras aim at. The
     mesh also covers the marker's surroundings (for the scale), where a false detection on the drape or the
     marker must not count as burn."""
@@ -118,17 +125,29 @@ def run(conf: AnalysisConfig, views: list[View], mesh_ply: Path, seg_dir: Path, 
     if not np.any(np.nan_to_num(q) >= 0.5):
         raise CaptureInsufficient(
             "no burn was found on the reconstructed surface; check the overlays, or draw the burn's outline "
-            "on some photos (--masks) and run again", code=FailureCode.no_burn)  # fmt: skip
+            "on some photos (--masks) and run again",
+            code=FailureCode.no_burn,
+        )
     tmp = out_dir / (ARRAYS + ".tmp.npz")
     in_burn = np.nan_to_num(q) >= 0.5
-    np.savez_compressed(tmp, vertices=vertices, faces=faces, q=q, views_per_vertex=fusion.views_per_vertex(w),
-                        view_sees_burn=np.any(w[:, in_burn] > 0, axis=1),
-                        view_names=np.array([v.name for v in views]),
-                        **{f"q_{k}": v for k, v in fused.items()})  # fmt: skip
+    np.savez_compressed(
+        tmp,
+        vertices=vertices,
+        faces=faces,
+        q=q,
+        views_per_vertex=fusion.views_per_vertex(w),
+        view_sees_burn=np.any(w[:, in_burn] > 0, axis=1),
+        view_names=np.array([v.name for v in views]),
+        **{f"q_{k}": v for k, v in fused.items()},
+    )
     tmp.replace(out_dir / ARRAYS)
     _write_painted(vertices, faces, np.asarray(mesh.vertex_colors), q, out_dir / GLB)
-    log.info("surface: %d vertices, %d seen by a picture, %d in the burn", len(vertices),
-             int(np.sum(~np.isnan(q))), int(np.sum(np.nan_to_num(q) >= 0.5)))  # fmt: skip
+    log.info(
+        "surface: %d vertices, %d seen by a picture, %d in the burn",
+        len(vertices),
+        int(np.sum(~np.isnan(q))),
+        int(np.sum(np.nan_to_num(q) >= 0.5)),
+    )
     return out_dir / ARRAYS
 
 

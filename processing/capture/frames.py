@@ -134,8 +134,9 @@ def _render(pick: _Pick, config: FramesConfig, gate: QualityGateConfig, name: st
         raise InvalidInput("a video frame could not be encoded as JPEG")
     gray = np.ascontiguousarray(np.rot90(luma(pick.frame, 1), turns))
     verdict = gate_pixels(gray, gate, name=f"{name}@{pick.time_s:.3f}s")
-    return ExtractedFrame(time_s=round(pick.time_s, 3), jpeg=buf.tobytes(), sharpness=round(pick.sharpness, 1),
-                          verdict=verdict)  # fmt: skip
+    return ExtractedFrame(
+        time_s=round(pick.time_s, 3), jpeg=buf.tobytes(), sharpness=round(pick.sharpness, 1), verdict=verdict
+    )
 
 
 def upright_turns(frame: av.VideoFrame) -> int:

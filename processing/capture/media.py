@@ -15,8 +15,25 @@ from schemas.errors import InvalidInput, UnsupportedMedia, plain
 
 HEIF_BRANDS = {b"heic", b"heix", b"hevc", b"hevx", b"heim", b"heis", b"hevm", b"hevs", b"mif1", b"msf1"}
 QUICKTIME_BRANDS = {b"qt  "}
-MP4_BRANDS = {b"isom", b"iso2", b"iso4", b"iso5", b"iso6", b"mp41", b"mp42", b"avc1", b"M4V ", b"M4VP", b"3gp4",
-              b"3gp5", b"3gp6", b"3g2a", b"dash", b"mmp4", b"MSNV"}  # fmt: skip
+MP4_BRANDS = {
+    b"isom",
+    b"iso2",
+    b"iso4",
+    b"iso5",
+    b"iso6",
+    b"mp41",
+    b"mp42",
+    b"avc1",
+    b"M4V ",
+    b"M4VP",
+    b"3gp4",
+    b"3gp5",
+    b"3gp6",
+    b"3g2a",
+    b"dash",
+    b"mmp4",
+    b"MSNV",
+}
 VIDEO_CODECS = {"h264", "hevc"}
 
 
@@ -114,8 +131,10 @@ def check_video(
                 raise InvalidInput(f"video codec {codec} is not supported: record in H.264 or HEVC (the phone default)")
             duration = float(stream.duration * stream.time_base) if stream.duration else (container.duration or 0) / 1e6
             if duration > max_seconds:
-                raise InvalidInput(f"the video lasts {duration:.0f} s, longer than the {max_seconds} s allowed: "
-                                   "film one slow circle around the burn")  # fmt: skip
+                raise InvalidInput(
+                    f"the video lasts {duration:.0f} s, longer than the {max_seconds} s allowed: "
+                    "film one slow circle around the burn"
+                )
             if stream.codec_context.width and stream.codec_context.height:  # from the header, before decoding
                 _check_frame_size(stream.codec_context.width, stream.codec_context.height, limits)
             first = next(container.decode(stream), None)
@@ -124,11 +143,14 @@ def check_video(
             _check_frame_size(first.width, first.height, limits)
             _decode_near_end(container, stream, duration)
             meta = CaptureMetadata(
-                captured_at=container.metadata.get("creation_time"), width=first.width, height=first.height,
-                duration_s=round(duration, 3), video_codec=codec,
+                captured_at=container.metadata.get("creation_time"),
+                width=first.width,
+                height=first.height,
+                duration_s=round(duration, 3),
+                video_codec=codec,
                 frame_rate=round(float(stream.average_rate), 3) if stream.average_rate else None,
                 orientation=_rotation(first),
-            )  # fmt: skip
+            )
     except av.FFmpegError as exc:
         raise InvalidInput(f"the video is truncated, corrupt or not a video: {plain(exc)}") from exc
     return meta
@@ -136,11 +158,14 @@ def check_video(
 
 def _check_frame_size(width: int, height: int, limits: QualityGateConfig) -> None:
     if max(width, height) > MAX_VIDEO_SIDE:
-        raise InvalidInput(f"the video is {width}x{height} pixels, more than {MAX_VIDEO_SIDE} on a side: "
-                           "record at 4K or less")  # fmt: skip
+        raise InvalidInput(
+            f"the video is {width}x{height} pixels, more than {MAX_VIDEO_SIDE} on a side: record at 4K or less"
+        )
     if max(width, height) < limits.min_width or min(width, height) < limits.min_height:
-        raise InvalidInput(f"the video is {width}x{height} pixels, smaller than a usable photo "
-                           f"({limits.min_width}x{limits.min_height}): record at 720p or more")  # fmt: skip
+        raise InvalidInput(
+            f"the video is {width}x{height} pixels, smaller than a usable photo "
+            f"({limits.min_width}x{limits.min_height}): record at 720p or more"
+        )
 
 
 def _decode_near_end(container, stream, duration: float) -> None:

@@ -29,7 +29,7 @@ GUIDANCE = {
     QualityReason.too_bright: "Too much light: avoid direct sunlight and flash glare on the skin, or tilt the phone slightly.",
     QualityReason.no_marker: "Keep the scale marker in view: lay it flat on the skin next to the burn.",
     QualityReason.marker_too_small: "Move closer: the scale marker is too small in the picture for a precise scale.",
-}  # fmt: skip
+}
 GRID = (8, 6)
 """Tiles across and down; the central region is the grid without its outer ring."""
 
@@ -43,8 +43,13 @@ def gate_bytes(data: bytes, config: QualityGateConfig, *, name: str) -> QualityV
     try:
         image = load_for_analysis(data, long_side=config.analysis_long_side, max_pixels=config.max_pixels)
     except InvalidInput as exc:
-        return QualityVerdict(file=name, accepted=False, reasons=[QualityReason.unreadable],
-                              guidance=[f"{GUIDANCE[QualityReason.unreadable]} ({exc.detail})"], figures=None)  # fmt: skip
+        return QualityVerdict(
+            file=name,
+            accepted=False,
+            reasons=[QualityReason.unreadable],
+            guidance=[f"{GUIDANCE[QualityReason.unreadable]} ({exc.detail})"],
+            figures=None,
+        )
 
     def finer() -> AnalysisImage:
         return load_for_analysis(data, long_side=2 * config.analysis_long_side, max_pixels=config.max_pixels)
@@ -72,8 +77,13 @@ def gate_image(image: AnalysisImage, config: QualityGateConfig, *, name: str, fi
         markers = find_markers(detail.gray, detail.scale, config.marker_dictionary)
     figures = _figures(image, markers, config, time.perf_counter() - start)
     reasons = judge(figures, config)
-    return QualityVerdict(file=name, accepted=not (set(reasons) & REJECTING), reasons=reasons,
-                          guidance=[GUIDANCE[r] for r in reasons], figures=figures)  # fmt: skip
+    return QualityVerdict(
+        file=name,
+        accepted=not (set(reasons) & REJECTING),
+        reasons=reasons,
+        guidance=[GUIDANCE[r] for r in reasons],
+        figures=figures,
+    )
 
 
 def judge(f: QualityFigures, config: QualityGateConfig) -> list[QualityReason]:
@@ -93,8 +103,9 @@ def judge(f: QualityFigures, config: QualityGateConfig) -> list[QualityReason]:
     return reasons
 
 
-def _figures(image: AnalysisImage, markers: list[MarkerSighting], config: QualityGateConfig,
-             seconds: float) -> QualityFigures:  # fmt: skip
+def _figures(
+    image: AnalysisImage, markers: list[MarkerSighting], config: QualityGateConfig, seconds: float
+) -> QualityFigures:
     gray = image.gray
     lap = cv2.Laplacian(gray, cv2.CV_32F)
     return QualityFigures(

@@ -117,16 +117,31 @@ def assess(views: list[View], config: ReadinessConfig, gate: QualityGateConfig) 
     spread = spread_deg(directions)
     missing = []
     if len(accepted) < config.min_views:
-        missing.append(f"At least {config.min_views} usable photos are needed ({len(accepted)} so far): "
-                       "take more, or film a slow circle around the burn.")  # fmt: skip
+        missing.append(
+            f"At least {config.min_views} usable photos are needed ({len(accepted)} so far): "
+            "take more, or film a slow circle around the burn."
+        )
     if len(directions) < config.min_marker_views:
-        hint = ("lay it flat on the skin next to the burn" if len(sightings) == len(directions) else
-                "in some it is too small or seen straight on to tell the angle: come closer, and take photos "
-                "from the sides too")  # fmt: skip
-        missing.append(f"The scale marker must be visible in at least {config.min_marker_views} usable photos "
-                       f"({len(directions)} so far): {hint}.")  # fmt: skip
+        hint = (
+            "lay it flat on the skin next to the burn"
+            if len(sightings) == len(directions)
+            else "in some it is too small or seen straight on to tell the angle: come closer, and take photos "
+            "from the sides too"
+        )
+        missing.append(
+            f"The scale marker must be visible in at least {config.min_marker_views} usable photos "
+            f"({len(directions)} so far): {hint}."
+        )
     if spread is not None and spread < config.min_spread_deg:
-        missing.append(f"The photos were taken from nearly one spot ({spread:.0f}° apart, {config.min_spread_deg:.0f}° "
-                       "needed): walk around the burn, keeping it in view.")  # fmt: skip
-    return CaptureReadiness(ready=not missing, views=len(views), accepted_views=len(accepted), marker_views=len(directions),
-                            viewpoint_spread_deg=spread, missing=missing)  # fmt: skip
+        missing.append(
+            f"The photos were taken from nearly one spot ({spread:.0f}° apart, {config.min_spread_deg:.0f}° "
+            "needed): walk around the burn, keeping it in view."
+        )
+    return CaptureReadiness(
+        ready=not missing,
+        views=len(views),
+        accepted_views=len(accepted),
+        marker_views=len(directions),
+        viewpoint_spread_deg=spread,
+        missing=missing,
+    )

@@ -55,10 +55,13 @@ def change(baseline: Figures, current: Figures) -> Change:
     def diff(a: float | None, b: float | None) -> float | None:
         return None if a is None or b is None else b - a
 
-    return Change(area_change_cm2=delta, area_change_percent=percent,
-                  percent_area_reduction=None if percent is None else -percent,
-                  relief_change_mm=diff(baseline.relief_max_mm, current.relief_max_mm),
-                  volume_change_cm3=diff(baseline.volume_cm3, current.volume_cm3))  # fmt: skip
+    return Change(
+        area_change_cm2=delta,
+        area_change_percent=percent,
+        percent_area_reduction=None if percent is None else -percent,
+        relief_change_mm=diff(baseline.relief_max_mm, current.relief_max_mm),
+        volume_change_cm3=diff(baseline.volume_cm3, current.volume_cm3),
+    )
 
 
 @dataclass(frozen=True)
@@ -85,8 +88,16 @@ def healing_rate(days: list[float], areas: list[float]) -> Rate:
     mean_day, mean_area = (float(x.mean()), float(y.mean())) if n else (math.nan, math.nan)
     sxx = float(np.sum((x - mean_day) ** 2)) if n else 0.0
     if n < 2 or sxx == 0:
-        return Rate(n, None, None, mean_day, mean_area, sxx, None,
-                    reason="a healing rate needs measured visits on at least two different days")  # fmt: skip
+        return Rate(
+            n,
+            None,
+            None,
+            mean_day,
+            mean_area,
+            sxx,
+            None,
+            reason="a healing rate needs measured visits on at least two different days",
+        )
     slope = float(np.sum((x - mean_day) * (y - mean_area)) / sxx)
     if n < 3:
         return Rate(n, -slope, None, mean_day, mean_area, sxx, None)
@@ -114,11 +125,20 @@ def projected_closure(rate: Rate, level: float = 0.95) -> Projection:
     if rate.rate_cm2_per_day is None:
         return Projection(None, None, None, f"no projection: {rate.reason}")
     if rate.n < 3:
-        return Projection(None, None, None, "no projection: it needs at least three measured visits (two visits fix a "
-                          "line but say nothing about its uncertainty)")  # fmt: skip
+        return Projection(
+            None,
+            None,
+            None,
+            "no projection: it needs at least three measured visits (two visits fix a "
+            "line but say nothing about its uncertainty)",
+        )
     if rate.rate_cm2_per_day <= 0:
-        return Projection(None, None, None, f"no projection: the area is not shrinking (fitted rate "
-                          f"{rate.rate_cm2_per_day:+.3f} cm2/day)")  # fmt: skip
+        return Projection(
+            None,
+            None,
+            None,
+            f"no projection: the area is not shrinking (fitted rate {rate.rate_cm2_per_day:+.3f} cm2/day)",
+        )
     slope, mean = -rate.rate_cm2_per_day, rate.mean_area_cm2
     day = rate.mean_day - mean / slope
     t = float(stats.t.ppf(0.5 + level / 2, rate.n - 2))
@@ -129,8 +149,10 @@ def projected_closure(rate: Rate, level: float = 0.95) -> Projection:
         root = math.sqrt(max(disc, 0.0))
         low, high = sorted(((-b - root) / (2 * a), (-b + root) / (2 * a)))
         return Projection(day, rate.mean_day + low, rate.mean_day + high)
-    note = ("the shrinking is not certain at the 95 % level (the slope's interval includes zero): the latest "
-            "closure day is open")  # fmt: skip
+    note = (
+        "the shrinking is not certain at the 95 % level (the slope's interval includes zero): the latest "
+        "closure day is open"
+    )
     if disc <= 0 or a == 0:
         return Projection(day, None, None, note)
     low, high = sorted(((-b - math.sqrt(disc)) / (2 * a), (-b + math.sqrt(disc)) / (2 * a)))
@@ -146,22 +168,33 @@ def _fmt(day: float) -> str:
 def shrink_flag(conf: TrackingConfig, days: list[float], areas: list[float]) -> StallFlag:
     """Kantor & Margolis: less than 40 % area reduction 4 weeks after the first measured visit. Judged on the
     latest measured visit at or after 4 weeks."""
-    rule = (f"less than {conf.stall_reduction_percent:g} % area reduction {_fmt(conf.stall_after_days)} days after "
-            "the first measured visit")  # fmt: skip
+    rule = (
+        f"less than {conf.stall_reduction_percent:g} % area reduction {_fmt(conf.stall_after_days)} days after "
+        "the first measured visit"
+    )
     late = [i for i, d in enumerate(days) if d - days[0] >= conf.stall_after_days]
     if not late:
         span = days[-1] - days[0] if days else 0.0
-        return StallFlag(rule=rule, citation=KANTOR_2000, evaluable=False, triggered=False,
-                         detail=f"not yet evaluable: the last measured visit is {_fmt(span)} days after the first "
-                                f"({_fmt(conf.stall_after_days)} needed)")  # fmt: skip
+        return StallFlag(
+            rule=rule,
+            citation=KANTOR_2000,
+            evaluable=False,
+            triggered=False,
+            detail=f"not yet evaluable: the last measured visit is {_fmt(span)} days after the first "
+            f"({_fmt(conf.stall_after_days)} needed)",
+        )
     i = late[-1]
     reduction = 100.0 * (areas[0] - areas[i]) / areas[0] if areas[0] > 0 else 0.0
     triggered = reduction < conf.stall_reduction_percent
-    detail = (f"day {_fmt(days[i])}: area reduced by {reduction:.0f} % since day {_fmt(days[0])} "
-              f"({areas[0]:.2f} -> {areas[i]:.2f} cm2)")  # fmt: skip
+    detail = (
+        f"day {_fmt(days[i])}: area reduced by {reduction:.0f} % since day {_fmt(days[0])} "
+        f"({areas[0]:.2f} -> {areas[i]:.2f} cm2)"
+    )
     if triggered:
-        detail += ("; in chronic wounds this predicted poor healing: consider a clinical review of the wound and of "
-                   "its treatment")  # fmt: skip
+        detail += (
+            "; in chronic wounds this predicted poor healing: consider a clinical review of the wound and of "
+            "its treatment"
+        )
     return StallFlag(rule=rule, citation=KANTOR_2000, evaluable=True, triggered=triggered, detail=detail)
 
 
@@ -171,14 +204,21 @@ def day21_flag(conf: TrackingConfig, days: list[float], areas: list[float]) -> S
     rule = f"burn not healed by day {deadline} after the injury (days as given: days since the injury)"
     if not days or days[-1] < conf.healing_deadline_day:
         last = f"day {_fmt(days[-1])}" if days else "none"
-        return StallFlag(rule=rule, citation=DEITCH_1983, evaluable=False, triggered=False,
-                         detail=f"not yet evaluable: the last measured visit is {last}")  # fmt: skip
+        return StallFlag(
+            rule=rule,
+            citation=DEITCH_1983,
+            evaluable=False,
+            triggered=False,
+            detail=f"not yet evaluable: the last measured visit is {last}",
+        )
     open_area = areas[-1]
     triggered = open_area >= conf.healed_area_cm2
     detail = f"day {_fmt(days[-1])}: {open_area:.2f} cm2 still open"
     if triggered:
-        detail += ("; the risk of hypertrophic scarring rises steeply after 21 days: consider review by the burn team "
-                   "for surgical management and scar prevention")  # fmt: skip
+        detail += (
+            "; the risk of hypertrophic scarring rises steeply after 21 days: consider review by the burn team "
+            "for surgical management and scar prevention"
+        )
     else:
         detail += f" (under {conf.healed_area_cm2:g} cm2: counted as healed; confirm on examination)"
     return StallFlag(rule=rule, citation=DEITCH_1983, evaluable=True, triggered=triggered, detail=detail)
@@ -189,22 +229,33 @@ def projected_day21_flag(conf: TrackingConfig, days: list[float], projection: Pr
     deadline = _fmt(conf.healing_deadline_day)
     rule = f"projected closure after day {deadline} after the injury (the fitted line of area against day)"
     if days and days[-1] >= conf.healing_deadline_day:
-        return StallFlag(rule=rule, citation=DEITCH_1983, evaluable=False, triggered=False,
-                         detail=f"not needed: a visit on or after day {deadline} was measured (see the rule above)")  # fmt: skip
+        return StallFlag(
+            rule=rule,
+            citation=DEITCH_1983,
+            evaluable=False,
+            triggered=False,
+            detail=f"not needed: a visit on or after day {deadline} was measured (see the rule above)",
+        )
     if projection.day is None:
-        return StallFlag(rule=rule, citation=DEITCH_1983, evaluable=False, triggered=False,
-                         detail=f"not yet evaluable: {projection.note.removeprefix('no projection: ')}")  # fmt: skip
+        return StallFlag(
+            rule=rule,
+            citation=DEITCH_1983,
+            evaluable=False,
+            triggered=False,
+            detail=f"not yet evaluable: {projection.note.removeprefix('no projection: ')}",
+        )
     low = "?" if projection.earliest is None else f"{projection.earliest:.0f}"
     high = "open" if projection.latest is None else f"{projection.latest:.0f}"
     triggered = projection.day > conf.healing_deadline_day
     detail = f"projected closure on day {projection.day:.0f} (95 % range {low} to {high})"
     if triggered:
-        detail += (f": at this pace the burn would not be healed by day {deadline}; consider early review by the burn "
-                   "team (an extrapolation: re-measure at the next visit)")  # fmt: skip
+        detail += (
+            f": at this pace the burn would not be healed by day {deadline}; consider early review by the burn "
+            "team (an extrapolation: re-measure at the next visit)"
+        )
     return StallFlag(rule=rule, citation=DEITCH_1983, evaluable=True, triggered=triggered, detail=detail)
 
 
 def stall_flags(conf: TrackingConfig, days: list[float], areas: list[float], projection: Projection) -> list[StallFlag]:
     """Every review prompt, evaluable or not, for the measured visits (days ascending, areas in cm2)."""
-    return [shrink_flag(conf, days, areas), day21_flag(conf, days, areas),
-            projected_day21_flag(conf, days, projection)]  # fmt: skip
+    return [shrink_flag(conf, days, areas), day21_flag(conf, days, areas), projected_day21_flag(conf, days, projection)]

@@ -77,16 +77,18 @@ def load_surface(npz: Path, mesh_ply: Path | None = None) -> Surface:
     burn = np.nan_to_num(q) >= 0.5
     if not burn.any():
         raise CaptureInsufficient(f"{npz} holds no burn to register around", code=FailureCode.no_burn)
-    mesh = o3d.geometry.TriangleMesh(o3d.utility.Vector3dVector(vertices.astype(np.float64)),
-                                     o3d.utility.Vector3iVector(faces.astype(np.int32)))  # fmt: skip
+    mesh = o3d.geometry.TriangleMesh(
+        o3d.utility.Vector3dVector(vertices.astype(np.float64)), o3d.utility.Vector3iVector(faces.astype(np.int32))
+    )
     mesh.compute_vertex_normals()
     grey = None
     if mesh_ply is not None and mesh_ply.is_file():
         colours = np.asarray(o3d.io.read_triangle_mesh(str(mesh_ply)).vertex_colors)
         if len(colours) == len(vertices):
             grey = colours @ np.array([0.299, 0.587, 0.114])
-    return Surface(vertices=vertices.astype(np.float64), normals=np.asarray(mesh.vertex_normals).copy(), burn=burn,
-                   grey=grey)  # fmt: skip
+    return Surface(
+        vertices=vertices.astype(np.float64), normals=np.asarray(mesh.vertex_normals).copy(), burn=burn, grey=grey
+    )
 
 
 def off_plane(conf: TrackingConfig, surface: Surface) -> np.ndarray:
@@ -111,13 +113,21 @@ def on_skin(surface: Surface, usable: np.ndarray, name: str) -> Surface:
     around (it would move the burn's centre and the skin ring)."""
     burn = surface.burn & usable
     if not burn.any():
-        raise CaptureInsufficient(f"no burn on the limb in the {name}'s surface (only on the drape) to register "
-                                  "around", code=FailureCode.no_burn)  # fmt: skip
+        raise CaptureInsufficient(
+            f"no burn on the limb in the {name}'s surface (only on the drape) to register around",
+            code=FailureCode.no_burn,
+        )
     return replace(surface, burn=burn)
 
 
-def skin_mask(conf: TrackingConfig, surface: Surface, around: np.ndarray, reach_mm: float, avoid: list[np.ndarray],
-              usable: np.ndarray) -> np.ndarray:  # fmt: skip
+def skin_mask(
+    conf: TrackingConfig,
+    surface: Surface,
+    around: np.ndarray,
+    reach_mm: float,
+    avoid: list[np.ndarray],
+    usable: np.ndarray,
+) -> np.ndarray:
     """Per vertex, healthy skin: usable, within `reach_mm` of the points `around`, and farther than the margin from
     every point set in `avoid` (burns, in this surface's frame)."""
     keep = usable.copy()
@@ -183,8 +193,9 @@ def texture_agreement(transform: np.ndarray, source: Skin, target: Skin) -> floa
     near 0 for a wrong alignment, whatever the geometry says; None without texture."""
     if source.smooth_texture is None or target.smooth_texture is None:
         return None
-    gap, nearest = cKDTree(target.points).query(_apply(transform, source.points),
-                                                distance_upper_bound=AGREEMENT_MATCH_MM)  # fmt: skip
+    gap, nearest = cKDTree(target.points).query(
+        _apply(transform, source.points), distance_upper_bound=AGREEMENT_MATCH_MM
+    )
     matched = np.isfinite(gap)
     if matched.sum() < 50:
         return 0.0
@@ -201,8 +212,9 @@ def features(conf: TrackingConfig, skin: Skin) -> o3d.pipelines.registration.Fea
     rings around the point (turning the skin does not change it). A limb is nearly a cylinder, whose shape looks
     alike everywhere; freckles, hair and pores do not. The texture part is scaled to the FPFH's typical length
     times conf.texture_feature_weight."""
-    fpfh = reg.compute_fpfh_feature(skin.cloud, o3d.geometry.KDTreeSearchParamHybrid(radius=conf.fpfh_radius_mm,
-                                                                                     max_nn=100))  # fmt: skip
+    fpfh = reg.compute_fpfh_feature(
+        skin.cloud, o3d.geometry.KDTreeSearchParamHybrid(radius=conf.fpfh_radius_mm, max_nn=100)
+    )
     if skin.texture is None or conf.texture_feature_weight == 0:
         return fpfh
     gaps, near = cKDTree(skin.points).query(skin.points, k=80, distance_upper_bound=TEXTURE_RINGS_MM[-1])
@@ -221,15 +233,20 @@ def features(conf: TrackingConfig, skin: Skin) -> o3d.pipelines.registration.Fea
     return combined
 
 
-def icp(conf: TrackingConfig, source: o3d.geometry.PointCloud, target: o3d.geometry.PointCloud,
-        start: np.ndarray) -> o3d.pipelines.registration.RegistrationResult:  # fmt: skip
+def icp(
+    conf: TrackingConfig, source: o3d.geometry.PointCloud, target: o3d.geometry.PointCloud, start: np.ndarray
+) -> o3d.pipelines.registration.RegistrationResult:
     """ICP rounds with shrinking correspondence distances (conf.icp_distances_mm), from `start`."""
-    estimation = (reg.TransformationEstimationPointToPlane() if conf.point_to_plane
-                  else reg.TransformationEstimationPointToPoint())  # fmt: skip
+    estimation = (
+        reg.TransformationEstimationPointToPlane()
+        if conf.point_to_plane
+        else reg.TransformationEstimationPointToPoint()
+    )
     result, transform = None, start
     for distance in conf.icp_distances_mm:
-        result = reg.registration_icp(source, target, distance, transform, estimation,
-                                      reg.ICPConvergenceCriteria(max_iteration=60))  # fmt: skip
+        result = reg.registration_icp(
+            source, target, distance, transform, estimation, reg.ICPConvergenceCriteria(max_iteration=60)
+        )
         transform = result.transformation
     return result
 
@@ -276,11 +293,20 @@ def coarse_tries(conf: TrackingConfig, source: Skin, target: Skin, fine_source: 
     for k in range(conf.ransac_tries):
         o3d.utility.random.seed(conf.seed + k)
         coarse = reg.registration_ransac_based_on_feature_matching(
-            source.cloud, target.cloud, source_features, target_features, True, conf.ransac_distance_mm,
-            reg.TransformationEstimationPointToPoint(False), 3,
-            [reg.CorrespondenceCheckerBasedOnEdgeLength(0.9),
-             reg.CorrespondenceCheckerBasedOnDistance(conf.ransac_distance_mm)],
-            reg.RANSACConvergenceCriteria(conf.ransac_iterations, 0.999))  # fmt: skip
+            source.cloud,
+            target.cloud,
+            source_features,
+            target_features,
+            True,
+            conf.ransac_distance_mm,
+            reg.TransformationEstimationPointToPoint(False),
+            3,
+            [
+                reg.CorrespondenceCheckerBasedOnEdgeLength(0.9),
+                reg.CorrespondenceCheckerBasedOnDistance(conf.ransac_distance_mm),
+            ],
+            reg.RANSACConvergenceCriteria(conf.ransac_iterations, 0.999),
+        )
         fine = icp(conf, fine_source.cloud, fine_target.cloud, coarse.transformation)
         transform = np.array(fine.transformation)
         texture = texture_agreement(transform, fine_source, fine_target)
@@ -299,32 +325,47 @@ def register(conf: TrackingConfig, baseline: Surface, follow: Surface) -> Regist
     # contracts towards its centre, so both discs cover about the same skin).
     disc_base = skin_mask(conf, baseline, baseline.burn_centre[None], reach, [baseline.burn_points], usable_base)
     disc_follow = skin_mask(conf, follow, follow.burn_centre[None], reach, [follow.burn_points], usable_follow)
-    coarse_base, coarse_follow = skin_cloud(baseline, disc_base, conf.voxel_mm), skin_cloud(follow, disc_follow,
-                                                                                          conf.voxel_mm)  # fmt: skip
+    coarse_base, coarse_follow = (
+        skin_cloud(baseline, disc_base, conf.voxel_mm),
+        skin_cloud(follow, disc_follow, conf.voxel_mm),
+    )
     for name, skin in (("first visit", coarse_base), ("this visit", coarse_follow)):
         if len(skin.points) < conf.min_points:
             raise CaptureInsufficient(
                 f"too little healthy skin around the burn on the {name}'s surface ({len(skin.points)} points at "
                 f"{conf.voxel_mm:g} mm, {conf.min_points} needed) to register the visits: photograph more skin "
-                "around the burn", code=FailureCode.too_few_views)  # fmt: skip
-    tries = coarse_tries(conf, coarse_follow, coarse_base, skin_cloud(follow, disc_follow, conf.fine_voxel_mm),
-                         skin_cloud(baseline, disc_base, conf.fine_voxel_mm))  # fmt: skip
+                "around the burn",
+                code=FailureCode.too_few_views,
+            )
+    tries = coarse_tries(
+        conf,
+        coarse_follow,
+        coarse_base,
+        skin_cloud(follow, disc_follow, conf.fine_voxel_mm),
+        skin_cloud(baseline, disc_base, conf.fine_voxel_mm),
+    )
     best = tries[0]
 
     # Fine: the same skin ring in both visits, around the baseline's burn, leaving out both burns.
     base_burn_in_follow = _apply(np.linalg.inv(best.transform), baseline.burn_points)
     follow_burn_in_base = _apply(best.transform, follow.burn_points)
     ring = conf.burn_margin_mm + conf.skin_ring_mm
-    fine_base = skin_cloud(baseline, skin_mask(conf, baseline, baseline.burn_points, ring,
-                                               [baseline.burn_points, follow_burn_in_base], usable_base),
-                           conf.fine_voxel_mm)  # fmt: skip
-    fine_follow = skin_cloud(follow, skin_mask(conf, follow, base_burn_in_follow, ring,
-                                               [follow.burn_points, base_burn_in_follow], usable_follow),
-                             conf.fine_voxel_mm)  # fmt: skip
+    fine_base = skin_cloud(
+        baseline,
+        skin_mask(conf, baseline, baseline.burn_points, ring, [baseline.burn_points, follow_burn_in_base], usable_base),
+        conf.fine_voxel_mm,
+    )
+    fine_follow = skin_cloud(
+        follow,
+        skin_mask(conf, follow, base_burn_in_follow, ring, [follow.burn_points, base_burn_in_follow], usable_follow),
+        conf.fine_voxel_mm,
+    )
     if min(len(fine_base.points), len(fine_follow.points)) < conf.min_points:
         raise CaptureInsufficient(
             "the two visits' surfaces share too little healthy skin around the burn to register them: photograph "
-            "more skin around the burn at each visit", code=FailureCode.too_few_views)  # fmt: skip
+            "more skin around the burn at each visit",
+            code=FailureCode.too_few_views,
+        )
     result = icp(conf, fine_follow.cloud, fine_base.cloud, best.transform)
     transform = np.array(result.transformation)
     texture = texture_agreement(transform, fine_follow, fine_base)
@@ -333,39 +374,60 @@ def register(conf: TrackingConfig, baseline: Surface, follow: Surface) -> Regist
     skin = fine_follow.points
     apart = [_rms_apart(t.transform, best.transform, skin) for t in tries]
     agreeing = sum(a <= AGREE_MM for a in apart)
-    rivals = [t for t, a in zip(tries, apart, strict=True) if a > AGREE_MM and t.score[0] >= RIVAL_SHARE * best.score[0]
-              and t.score[1] >= RIVAL_SHARE * best.score[1]]  # fmt: skip
+    rivals = [
+        t
+        for t, a in zip(tries, apart, strict=True)
+        if a > AGREE_MM and t.score[0] >= RIVAL_SHARE * best.score[0] and t.score[1] >= RIVAL_SHARE * best.score[1]
+    ]
     shift = float(np.linalg.norm(_apply(transform, follow.burn_centre[None])[0] - baseline.burn_centre))
     warnings = []
     if rmse > conf.max_rmse_mm:
-        warnings.append(f"the healthy skin of the two visits matches poorly (RMSE {rmse:.2f} mm, "
-                        f"limit {conf.max_rmse_mm:g} mm)")  # fmt: skip
+        warnings.append(
+            f"the healthy skin of the two visits matches poorly (RMSE {rmse:.2f} mm, limit {conf.max_rmse_mm:g} mm)"
+        )
     if result.fitness < conf.min_overlap:
-        warnings.append(f"only {100 * result.fitness:.0f} % of this visit's healthy skin matched the first visit's "
-                        f"(limit {100 * conf.min_overlap:.0f} %)")  # fmt: skip
+        warnings.append(
+            f"only {100 * result.fitness:.0f} % of this visit's healthy skin matched the first visit's "
+            f"(limit {100 * conf.min_overlap:.0f} %)"
+        )
     if texture is not None and texture < conf.min_texture_agreement:
-        warnings.append(f"the skin's texture (freckles, hair, pores) does not confirm the alignment (correlation "
-                        f"{texture:.2f}, limit {conf.min_texture_agreement:g})")  # fmt: skip
+        warnings.append(
+            f"the skin's texture (freckles, hair, pores) does not confirm the alignment (correlation "
+            f"{texture:.2f}, limit {conf.min_texture_agreement:g})"
+        )
     if rivals:
         warnings.append(f"RANSAC is unstable: {len(rivals)} other alignment(s) fit nearly as well")
     elif conf.ransac_tries > 1 and agreeing < 2:
         warnings.append(f"RANSAC is unstable: only 1 of {conf.ransac_tries} tries found this alignment")
     if shift > conf.max_burn_shift_mm:
-        warnings.append(f"the alignment moves the burn's centre by {shift:.0f} mm on the skin (limit "
-                        f"{conf.max_burn_shift_mm:g} mm)")  # fmt: skip
+        warnings.append(
+            f"the alignment moves the burn's centre by {shift:.0f} mm on the skin (limit {conf.max_burn_shift_mm:g} mm)"
+        )
     warning = ""
     if warnings:
         warning = "; ".join(warnings) + ": check that both visits show the same burn, and compare them by eye"
-    log.info("registered: RMSE %.3f mm, overlap %.2f, texture %s, %d/%d tries agree, burn shift %.1f mm",
-             rmse, result.fitness, "-" if texture is None else f"{texture:.2f}", agreeing, len(tries),
-             shift)  # fmt: skip
+    log.info(
+        "registered: RMSE %.3f mm, overlap %.2f, texture %s, %d/%d tries agree, burn shift %.1f mm",
+        rmse,
+        result.fitness,
+        "-" if texture is None else f"{texture:.2f}",
+        agreeing,
+        len(tries),
+        shift,
+    )
     return Registration(
         method=("fpfh+texture" if texture is not None and conf.texture_feature_weight > 0 else "fpfh")
-        + "_ransac+icp_" + ("point_to_plane" if conf.point_to_plane else "point_to_point"),
+        + "_ransac+icp_"
+        + ("point_to_plane" if conf.point_to_plane else "point_to_point"),
         transform_to_baseline=[[round(float(x), 9) for x in row] for row in transform],
-        rmse_mm=round(rmse, 4), overlap=round(float(result.fitness), 4),
+        rmse_mm=round(rmse, 4),
+        overlap=round(float(result.fitness), 4),
         texture_agreement=None if texture is None else round(texture, 3),
-        points=len(skin), baseline_points=len(fine_base.points), ransac_tries=len(tries),
-        ransac_agreeing=int(agreeing), burn_shift_mm=round(shift, 2),
-        seconds=round(time.perf_counter() - started, 2), warning=warning,
-    )  # fmt: skip
+        points=len(skin),
+        baseline_points=len(fine_base.points),
+        ransac_tries=len(tries),
+        ransac_agreeing=int(agreeing),
+        burn_shift_mm=round(shift, 2),
+        seconds=round(time.perf_counter() - started, 2),
+        warning=warning,
+    )

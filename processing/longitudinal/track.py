@@ -64,8 +64,12 @@ def _surface_digest(folder: Path) -> str:
 def cache_key(conf: TrackingConfig, baseline_dir: Path, follow_dir: Path) -> str:
     settings = {k: v for k, v in msgspec.to_builtins(conf).items() if k not in HEALING_SETTINGS}
     code = Path(registration.__file__).read_bytes()
-    parts = [_surface_digest(baseline_dir), _surface_digest(follow_dir), msgspec.json.encode(settings).decode(),
-             hashlib.sha256(code).hexdigest()]  # fmt: skip
+    parts = [
+        _surface_digest(baseline_dir),
+        _surface_digest(follow_dir),
+        msgspec.json.encode(settings).decode(),
+        hashlib.sha256(code).hexdigest(),
+    ]
     return hashlib.sha256("\n".join(parts).encode()).hexdigest()[:32]
 
 
@@ -110,8 +114,10 @@ def check_sessions(sessions: list[SessionAnalysis]) -> None:
         raise InvalidInput(f"every visit needs a finite day, got {days}")
     for earlier, later in zip(sessions, sessions[1:], strict=False):
         if later.day < earlier.day:
-            raise InvalidInput(f"visits must be in time order: day {later.day:g} ({later.label or later.analysis_dir}) "
-                               f"comes after day {earlier.day:g}")  # fmt: skip
+            raise InvalidInput(
+                f"visits must be in time order: day {later.day:g} ({later.label or later.analysis_dir}) "
+                f"comes after day {earlier.day:g}"
+            )
 
 
 def _r(value: float | None, digits: int) -> float | None:
@@ -128,8 +134,14 @@ def run(conf: TrackingConfig, sessions: list[SessionAnalysis], out_dir: Path) ->
     check_sessions(sessions)
     out_dir = Path(out_dir)
     read = [_read(s) for s in sessions]
-    measured = [i for i, (r, _) in enumerate(read) if r is not None and r.status is AnalysisStatus.ok
-                and r.metrics.area_cm2 is not None and (sessions[i].analysis_dir / SURFACE).is_file()]  # fmt: skip
+    measured = [
+        i
+        for i, (r, _) in enumerate(read)
+        if r is not None
+        and r.status is AnalysisStatus.ok
+        and r.metrics.area_cm2 is not None
+        and (sessions[i].analysis_dir / SURFACE).is_file()
+    ]
     notes: list[str] = []
     base = measured[0] if measured else None
     registrar = _Registrar(conf, sessions[base].analysis_dir, out_dir / CACHE) if base is not None else None
@@ -142,59 +154,100 @@ def run(conf: TrackingConfig, sessions: list[SessionAnalysis], out_dir: Path) ->
             continue
         if i not in measured:
             if result.status is AnalysisStatus.unscaled:
-                reason = ("unscaled analysis (no marker or ruler in the photos): its sizes are not in mm or cm, so it "
-                          "is neither registered nor compared")  # fmt: skip
+                reason = (
+                    "unscaled analysis (no marker or ruler in the photos): its sizes are not in mm or cm, so it "
+                    "is neither registered nor compared"
+                )
             elif result.status is AnalysisStatus.failed:
                 reason = f"analysis failed: {result.reason}"
                 if result.failure is FailureCode.no_burn and base is not None and i > base:
-                    notes.append(f"day {session.day:g}: no burn was found in the photos; if the wound has closed, "
-                                 "record it on examination (healing is not inferred from a missing measurement)")  # fmt: skip
+                    notes.append(
+                        f"day {session.day:g}: no burn was found in the photos; if the wound has closed, "
+                        "record it on examination (healing is not inferred from a missing measurement)"
+                    )
             else:
                 reason = "the analysis left no burn surface to compare (run it again)"
             rows.append(TrackSession(**common, status=result.status.value, reason=reason))
             continue
         m = result.metrics
-        figures = {"area_cm2": m.area_cm2, "perimeter_cm": m.perimeter_cm, "relief_max_mm": m.relief_max_mm,
-                   "volume_cm3": m.volume_cm3,
-                   "confidence_level": result.confidence.level if result.confidence else None}  # fmt: skip
+        figures = {
+            "area_cm2": m.area_cm2,
+            "perimeter_cm": m.perimeter_cm,
+            "relief_max_mm": m.relief_max_mm,
+            "volume_cm3": m.volume_cm3,
+            "confidence_level": result.confidence.level if result.confidence else None,
+        }
         if i == base:
-            rows.append(TrackSession(**common, **figures, status=result.status.value, baseline=True,
-                                     registration_rmse_mm=0.0, registration_overlap=1.0, area_change_cm2=0.0,
-                                     area_change_percent=0.0, percent_area_reduction=0.0,
-                                     relief_change_mm=0.0 if m.relief_max_mm is not None else None,
-                                     volume_change_cm3=0.0 if m.volume_cm3 is not None else None,
-                                     transform_to_baseline=np.eye(4).tolist()))  # fmt: skip
+            rows.append(
+                TrackSession(
+                    **common,
+                    **figures,
+                    status=result.status.value,
+                    baseline=True,
+                    registration_rmse_mm=0.0,
+                    registration_overlap=1.0,
+                    area_change_cm2=0.0,
+                    area_change_percent=0.0,
+                    percent_area_reduction=0.0,
+                    relief_change_mm=0.0 if m.relief_max_mm is not None else None,
+                    volume_change_cm3=0.0 if m.volume_cm3 is not None else None,
+                    transform_to_baseline=np.eye(4).tolist(),
+                )
+            )
             continue
         delta = healing.change(_figures(read[base][0]), _figures(result))
         try:
             fit = registrar(session.analysis_dir)
-            registered = {"registration_rmse_mm": fit.rmse_mm, "registration_overlap": fit.overlap,
-                          "registration_warning": fit.warning, "transform_to_baseline": fit.transform_to_baseline}  # fmt: skip
+            registered = {
+                "registration_rmse_mm": fit.rmse_mm,
+                "registration_overlap": fit.overlap,
+                "registration_warning": fit.warning,
+                "transform_to_baseline": fit.transform_to_baseline,
+            }
         except InvalidInput as exc:  # CaptureInsufficient too: too little skin; the figures still stand
             registered = {"registration_warning": f"not registered: {exc.detail}"}
-        rows.append(TrackSession(
-            **common, **figures, **registered, status=result.status.value,
-            area_change_cm2=_r(delta.area_change_cm2, 3), area_change_percent=_r(delta.area_change_percent, 2),
-            percent_area_reduction=_r(delta.percent_area_reduction, 2), relief_change_mm=_r(delta.relief_change_mm, 2),
-            volume_change_cm3=_r(delta.volume_change_cm3, 3)))  # fmt: skip
+        rows.append(
+            TrackSession(
+                **common,
+                **figures,
+                **registered,
+                status=result.status.value,
+                area_change_cm2=_r(delta.area_change_cm2, 3),
+                area_change_percent=_r(delta.area_change_percent, 2),
+                percent_area_reduction=_r(delta.percent_area_reduction, 2),
+                relief_change_mm=_r(delta.relief_change_mm, 2),
+                volume_change_cm3=_r(delta.volume_change_cm3, 3),
+            )
+        )
 
     days = [sessions[i].day for i in measured]
     areas = [read[i][0].metrics.area_cm2 for i in measured]
     if base is None:
         notes.append("no visit has a result in real units (mm, cm2): nothing to compare; see each visit's reason")
     elif base > 0:
-        notes.append(f"the baseline is visit {base + 1} (day {sessions[base].day:g}), the first with a result in real "
-                     "units; earlier visits are listed without figures")  # fmt: skip
+        notes.append(
+            f"the baseline is visit {base + 1} (day {sessions[base].day:g}), the first with a result in real "
+            "units; earlier visits are listed without figures"
+        )
     rate = healing.healing_rate(days, areas)
     projection = healing.projected_closure(rate)
     track = TrackResult(
-        sessions=rows, healing_rate_cm2_per_day=_r(rate.rate_cm2_per_day, 4),
-        healing_rate_se_cm2_per_day=_r(rate.se_cm2_per_day, 4), projected_closure_day=_r(projection.day, 1),
-        projected_closure_range_days=None if projection.day is None
+        sessions=rows,
+        healing_rate_cm2_per_day=_r(rate.rate_cm2_per_day, 4),
+        healing_rate_se_cm2_per_day=_r(rate.se_cm2_per_day, 4),
+        projected_closure_day=_r(projection.day, 1),
+        projected_closure_range_days=None
+        if projection.day is None
         else [_r(projection.earliest, 1), _r(projection.latest, 1)],
-        projection_note=projection.note, stall_flags=healing.stall_flags(conf, days, areas, projection), notes=notes,
-    )  # fmt: skip
+        projection_note=projection.note,
+        stall_flags=healing.stall_flags(conf, days, areas, projection),
+        notes=notes,
+    )
     path = write_json(out_dir / RESULT, track)
-    log.info("track: %d visits, %d measured, rate %s cm2/day", len(sessions), len(measured),
-             "-" if rate.rate_cm2_per_day is None else f"{rate.rate_cm2_per_day:.3f}")  # fmt: skip
+    log.info(
+        "track: %d visits, %d measured, rate %s cm2/day",
+        len(sessions),
+        len(measured),
+        "-" if rate.rate_cm2_per_day is None else f"{rate.rate_cm2_per_day:.3f}",
+    )
     return path

@@ -46,8 +46,13 @@ class Camera:
     def in_frame(self, points: np.ndarray, margin: float) -> bool:
         px, depth = self.project(points)
         m = margin * self.width
-        return bool((depth > 0).all() and (px[:, 0] >= m).all() and (px[:, 0] <= self.width - 1 - m).all()
-                    and (px[:, 1] >= m).all() and (px[:, 1] <= self.height - 1 - m).all())  # fmt: skip
+        return bool(
+            (depth > 0).all()
+            and (px[:, 0] >= m).all()
+            and (px[:, 0] <= self.width - 1 - m).all()
+            and (px[:, 1] >= m).all()
+            and (px[:, 1] <= self.height - 1 - m).all()
+        )
 
 
 def intrinsics(width: int, height: int, hfov_deg: float) -> np.ndarray:
@@ -71,8 +76,15 @@ def _stratified(rng: np.random.Generator, n: int, lo: float, hi: float) -> np.nd
     return lo + (hi - lo) * (rng.permutation(n) + rng.uniform(0.15, 0.85, n)) / n
 
 
-def sample_cameras(scene: Scene, views: int, width: int, height: int, hfov_deg: float,
-                   distance_mm: tuple[float, float], rng: np.random.Generator) -> list[Camera]:  # fmt: skip
+def sample_cameras(
+    scene: Scene,
+    views: int,
+    width: int,
+    height: int,
+    hfov_deg: float,
+    distance_mm: tuple[float, float],
+    rng: np.random.Generator,
+) -> list[Camera]:
     K = intrinsics(width, height, hfov_deg)
     burn_centre, burn_normal = scene.burn_centre_world()
     boundary = scene.boundary_world(120)
@@ -89,8 +101,9 @@ def sample_cameras(scene: Scene, views: int, width: int, height: int, hfov_deg: 
             azimuth = azimuth0 + 2 * math.pi * (i + rng.uniform(-spread, spread)) / views
             elevation = math.radians(np.clip(elevations[i] + rng.normal(0, 3 + 0.1 * attempt), *ELEVATION_DEG))
             distance = float(np.clip(distances[i] + rng.normal(0, 10), *distance_mm))
-            direction = np.array([math.cos(elevation) * math.cos(azimuth), math.cos(elevation) * math.sin(azimuth),
-                                  math.sin(elevation)])  # fmt: skip
+            direction = np.array(
+                [math.cos(elevation) * math.cos(azimuth), math.cos(elevation) * math.sin(azimuth), math.sin(elevation)]
+            )
             if math.degrees(math.acos(np.clip(direction @ burn_normal, -1, 1))) > MAX_BURN_OBLIQUITY_DEG:
                 continue
             centre = burn_centre + distance * direction
@@ -107,8 +120,10 @@ def sample_cameras(scene: Scene, views: int, width: int, height: int, hfov_deg: 
             if attempt >= TRIES_WITH_MARKER:
                 break
         if chosen is None:
-            raise InvalidInput(f"could not place camera {i} so that it sees the whole burn: with a "
-                               f"{math.degrees(2 * math.atan(width / 2 / K[0, 0])):.0f} degree field of view, "
-                               "use larger distances or a smaller burn")  # fmt: skip
+            raise InvalidInput(
+                f"could not place camera {i} so that it sees the whole burn: with a "
+                f"{math.degrees(2 * math.atan(width / 2 / K[0, 0])):.0f} degree field of view, "
+                "use larger distances or a smaller burn"
+            )
         cameras.append(chosen)
     return cameras

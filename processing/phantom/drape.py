@@ -83,8 +83,12 @@ def make_cloth(rng: np.random.Generator, near_texel_mm: float) -> DrapeCloth:
     near *= 1.0 + 0.15 * grain * fade
     area_cm2 = (2 * NEAR_HALF_MM) ** 2 / 100
     n_dots = int(2.0 * area_cm2)
-    dots = draw_dots((near_n, near_n), rng.uniform(0, near_n, (n_dots, 2)), rng.uniform(0.5, 2.0, n_dots) * mm,
-                     rng.uniform(0.7, 1.0, n_dots))[..., None]  # fmt: skip
+    dots = draw_dots(
+        (near_n, near_n),
+        rng.uniform(0, near_n, (n_dots, 2)),
+        rng.uniform(0.5, 2.0, n_dots) * mm,
+        rng.uniform(0.7, 1.0, n_dots),
+    )[..., None]
     near += (palette[3] - near) * dots * fade
     n_fibres = int(1.5 * area_cm2)
     fibres = random_strands(rng, n_fibres, (near_n, near_n), (2.0 * mm, 8.0 * mm), 0.0, 180.0)
@@ -99,9 +103,12 @@ def make_cloth(rng: np.random.Generator, near_texel_mm: float) -> DrapeCloth:
         waves.append(
             (k * math.cos(direction), k * math.sin(direction), rng.uniform(0, 2 * math.pi), rng.uniform(0.5, 1))
         )
-    return DrapeCloth(near=ChartTexture(near.astype(np.float32), (-NEAR_HALF_MM, -NEAR_HALF_MM), near_texel_mm),
-                      far=ChartTexture(far.astype(np.float32), far_origin, FAR_TEXEL_MM),
-                      waves=[tuple(float(v) for v in w) for w in waves], palette_srgb=palette_srgb)  # fmt: skip
+    return DrapeCloth(
+        near=ChartTexture(near.astype(np.float32), (-NEAR_HALF_MM, -NEAR_HALF_MM), near_texel_mm),
+        far=ChartTexture(far.astype(np.float32), far_origin, FAR_TEXEL_MM),
+        waves=[tuple(float(v) for v in w) for w in waves],
+        palette_srgb=palette_srgb,
+    )
 
 
 def grid_axis() -> np.ndarray:
@@ -134,10 +141,13 @@ def drape_mesh(cloth: DrapeCloth, keep_flat_xy: np.ndarray) -> tuple[np.ndarray,
 
 
 def describe(cloth: DrapeCloth) -> dict[str, Any]:
-    return {"model": f"height field z = h(x, y) >= 0: {FOLD_MM:g} mm * (1 + weighted mean of 5 sinusoids) / 2, "
-                     f"flat (z = 0) within {FLAT_MM:g} mm of the body part's footprint and the marker strip, "
-                     f"ramping up over {RAMP_MM:g} mm; extends to +-{FAR_HALF_MM:g} mm",
-            "waves_kx_ky_phase_weight": cloth.waves, "palette_srgb": cloth.palette_srgb}  # fmt: skip
+    return {
+        "model": f"height field z = h(x, y) >= 0: {FOLD_MM:g} mm * (1 + weighted mean of 5 sinusoids) / 2, "
+        f"flat (z = 0) within {FLAT_MM:g} mm of the body part's footprint and the marker strip, "
+        f"ramping up over {RAMP_MM:g} mm; extends to +-{FAR_HALF_MM:g} mm",
+        "waves_kx_ky_phase_weight": cloth.waves,
+        "palette_srgb": cloth.palette_srgb,
+    }
 
 
 def raster_index(xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -65,8 +65,10 @@ def validate(spec: PhantomSpec) -> PhantomSpec:
     except msgspec.ValidationError as exc:
         raise InvalidInput(f"phantom spec: {exc} (see `burnedge phantom --help` for the ranges)") from exc
     if spec.distance_min_mm >= spec.distance_max_mm:
-        raise InvalidInput(f"phantom spec: distance_min_mm ({spec.distance_min_mm:g}) must be below "
-                           f"distance_max_mm ({spec.distance_max_mm:g})")  # fmt: skip
+        raise InvalidInput(
+            f"phantom spec: distance_min_mm ({spec.distance_min_mm:g}) must be below "
+            f"distance_max_mm ({spec.distance_max_mm:g})"
+        )
     if spec.marker_ids is not None and (len(spec.marker_ids) != 3 or len(set(spec.marker_ids)) != 3):
         raise InvalidInput(f"phantom spec: marker_ids must be three different ids from 0 to 49, not {spec.marker_ids}")
     return spec
@@ -98,8 +100,10 @@ def place_burn(spec: PhantomSpec, surface: Surface) -> Burn:
             continue
         if surface.burn_allowed(*burn.chart_point(np.ones(360), np.linspace(0, 2 * math.pi, 360))).all():
             return burn
-    raise InvalidInput(f"a burn of {spec.area_cm2:g} cm2 does not fit on top of the {spec.shape.value}: "
-                       "ask for a smaller area or a larger body part (patch)")  # fmt: skip
+    raise InvalidInput(
+        f"a burn of {spec.area_cm2:g} cm2 does not fit on top of the {spec.shape.value}: "
+        "ask for a smaller area or a larger body part (patch)"
+    )
 
 
 def prepare(spec: PhantomSpec) -> Limb:
@@ -110,22 +114,54 @@ def prepare(spec: PhantomSpec) -> Limb:
     texel = max(0.1, ray_footprint_mm)
     surface = make_surface(spec.shape, stream(spec, Stream.surface))
     burn = place_burn(spec, surface)
-    ids = (spec.marker_ids[0], spec.marker_ids[1], spec.marker_ids[2]) if spec.marker_ids else choose_ids(
-        stream(spec, Stream.marker))  # fmt: skip
-    return Limb(surface=surface, burn=burn, skin=skin.skin_texture(surface, spec.tone, texel, stream(spec, Stream.skin)),
-                cloth=drape.make_cloth(stream(spec, Stream.cloth), 3 * texel),
-                marker_texture=strip_texture(ids, stream(spec, Stream.marker, 1)), marker_ids=ids,
-                texel_mm=texel, mesh_spacing_mm=float(np.clip(4 * ray_footprint_mm, 0.5, 1.5)))  # fmt: skip
+    ids = (
+        (spec.marker_ids[0], spec.marker_ids[1], spec.marker_ids[2])
+        if spec.marker_ids
+        else choose_ids(stream(spec, Stream.marker))
+    )
+    return Limb(
+        surface=surface,
+        burn=burn,
+        skin=skin.skin_texture(surface, spec.tone, texel, stream(spec, Stream.skin)),
+        cloth=drape.make_cloth(stream(spec, Stream.cloth), 3 * texel),
+        marker_texture=strip_texture(ids, stream(spec, Stream.marker, 1)),
+        marker_ids=ids,
+        texel_mm=texel,
+        mesh_spacing_mm=float(np.clip(4 * ray_footprint_mm, 0.5, 1.5)),
+    )
 
 
-def render_session(spec: PhantomSpec, limb: Limb, burn: Burn, object_to_world: np.ndarray, session: int,
-                   out_dir: Path, session_info: dict | None = None) -> tuple[Path, PhantomTruth]:  # fmt: skip
+def render_session(
+    spec: PhantomSpec,
+    limb: Limb,
+    burn: Burn,
+    object_to_world: np.ndarray,
+    session: int,
+    out_dir: Path,
+    session_info: dict | None = None,
+) -> tuple[Path, PhantomTruth]:
     started = time.perf_counter()
     texture = skin.apply_burn(limb.skin, burn, spec.healing, stream(spec, Stream.burn_look), spec.burn_look)
-    scene = build_scene(limb.surface, burn, object_to_world, texture, limb.cloth, limb.marker_texture,
-                        limb.marker_ids, limb.mesh_spacing_mm, stream(spec, Stream.placement, session))  # fmt: skip
-    cameras = sample_cameras(scene, spec.views, spec.width, spec.height, spec.hfov_deg,
-                             (spec.distance_min_mm, spec.distance_max_mm), stream(spec, Stream.cameras, session))  # fmt: skip
+    scene = build_scene(
+        limb.surface,
+        burn,
+        object_to_world,
+        texture,
+        limb.cloth,
+        limb.marker_texture,
+        limb.marker_ids,
+        limb.mesh_spacing_mm,
+        stream(spec, Stream.placement, session),
+    )
+    cameras = sample_cameras(
+        scene,
+        spec.views,
+        spec.width,
+        spec.height,
+        spec.hfov_deg,
+        (spec.distance_min_mm, spec.distance_max_mm),
+        stream(spec, Stream.cameras, session),
+    )
     for sub in ("images", "masks", "object_masks"):
         (out_dir / sub).mkdir(parents=True, exist_ok=True)
         for stale in (out_dir / sub).glob("view_*.*"):  # an earlier render with more views must not linger
@@ -136,8 +172,9 @@ def render_session(spec: PhantomSpec, limb: Limb, burn: Burn, object_to_world: n
         camera = cameras[i]
         view = render_view(scene, camera, spec.supersample, stream(spec, Stream.render, session, i))
         rgb = develop(view.linear, stream(spec, Stream.noise, session, i))
-        write_jpeg(out_dir / "images" / f"{camera.name}.jpg", rgb, spec.jpeg_quality, focal if spec.exif else None,
-                   GENERATOR)  # fmt: skip
+        write_jpeg(
+            out_dir / "images" / f"{camera.name}.jpg", rgb, spec.jpeg_quality, focal if spec.exif else None, GENERATOR
+        )
         write_mask(out_dir / "masks" / f"{camera.name}.png", view.burn_mask)
         write_mask(out_dir / "object_masks" / f"{camera.name}.png", view.object_mask)
 
@@ -150,22 +187,38 @@ def render_session(spec: PhantomSpec, limb: Limb, burn: Burn, object_to_world: n
     surface_check = write_true_surface(out_dir / "true_surface.npz", *true_surface(scene))
     figures.checks["true_surface_mesh"] = surface_check
     figures.checks["area_rel_diff_true_surface_vs_quadrature"] = relative_difference(
-        surface_check["area_mm2"], figures.quadrature["area_mm2"])  # fmt: skip
+        surface_check["area_mm2"], figures.quadrature["area_mm2"]
+    )
     focal_mm, focal_35 = exif_focal(spec.width, spec.height, focal)
-    info = {"spec": msgspec.to_builtins(spec), "surface": limb.surface.describe(), "burn": burn.describe(),
-            "appearance": {**skin.appearance(spec.tone, spec.healing), "burn_look": spec.burn_look.value}, "lights": scene.lights.describe(),
-            "drape": drape.describe(limb.cloth),
-            "render": {"supersample": spec.supersample, "texture_texel_mm": limb.texel_mm,
-                       "render_mesh_spacing_mm": limb.mesh_spacing_mm, "render_mesh_tris": len(scene.body.faces),
-                       "exif": {"written": spec.exif, "focal_length_mm": round(focal_mm, 3),
-                                "focal_length_35mm": focal_35}}}  # fmt: skip
+    info = {
+        "spec": msgspec.to_builtins(spec),
+        "surface": limb.surface.describe(),
+        "burn": burn.describe(),
+        "appearance": {**skin.appearance(spec.tone, spec.healing), "burn_look": spec.burn_look.value},
+        "lights": scene.lights.describe(),
+        "drape": drape.describe(limb.cloth),
+        "render": {
+            "supersample": spec.supersample,
+            "texture_texel_mm": limb.texel_mm,
+            "render_mesh_spacing_mm": limb.mesh_spacing_mm,
+            "render_mesh_tris": len(scene.body.faces),
+            "exif": {"written": spec.exif, "focal_length_mm": round(focal_mm, 3), "focal_length_35mm": focal_35},
+        },
+    }
     if session_info:
         info["session"] = session_info
     truth = session_truth(scene, figures, cameras, info, GENERATOR)
     path = out_dir / "ground_truth.json"
     path.write_bytes(encode_json(truth))
-    log.info("phantom %s: %d views %dx%d rendered in %.1f s, ground truth in %.1f s", out_dir, len(cameras),
-             spec.width, spec.height, rendered - started, time.perf_counter() - rendered)  # fmt: skip
+    log.info(
+        "phantom %s: %d views %dx%d rendered in %.1f s, ground truth in %.1f s",
+        out_dir,
+        len(cameras),
+        spec.width,
+        spec.height,
+        rendered - started,
+        time.perf_counter() - rendered,
+    )
     return path, truth
 
 
@@ -186,12 +239,19 @@ def run_series(spec: PhantomSpec, out_dir: Path) -> Path:
     out_dir = Path(out_dir)
     sessions = []
     for index, stage in enumerate(SERIES):
-        burn = size_burn(limb.surface, scaled(limb.burn, limb.burn.r0_mm, spec.depth_mm * stage.depth_ratio),
-                         spec.area_cm2 * 100.0 * stage.area_ratio)  # fmt: skip
+        burn = size_burn(
+            limb.surface,
+            scaled(limb.burn, limb.burn.r0_mm, spec.depth_mm * stage.depth_ratio),
+            spec.area_cm2 * 100.0 * stage.area_ratio,
+        )
         motion = session_motion(stream(spec, Stream.motion, index), index)
         session_spec = msgspec.structs.replace(spec, healing=max(spec.healing, stage.healing))
-        info = {"day": stage.day, "target_area_ratio": stage.area_ratio, "depth_ratio": stage.depth_ratio,
-                "contraction_factor": burn.r0_mm / limb.burn.r0_mm}  # fmt: skip
+        info = {
+            "day": stage.day,
+            "target_area_ratio": stage.area_ratio,
+            "depth_ratio": stage.depth_ratio,
+            "contraction_factor": burn.r0_mm / limb.burn.r0_mm,
+        }
         _, truth = render_session(session_spec, limb, burn, motion, index, out_dir / stage.folder, info)
         sessions.append((stage, burn.r0_mm / limb.burn.r0_mm, truth))
     path = out_dir / "ground_truth.json"

@@ -27,8 +27,14 @@ TRUE_SURFACE_FACING = 0.5
 """...and to skin whose normal is within 60 degrees of the burn's (not the steep flanks down to the drape)."""
 BOUNDARY_POINTS = 360
 
-UNITS = {"length": "mm", "area": "cm2", "perimeter": "cm", "depth": "mm", "volume": "cm3",
-         "world": "mm, z up; the drape is z = 0 around the body part and marker (folds further out)"}  # fmt: skip
+UNITS = {
+    "length": "mm",
+    "area": "cm2",
+    "perimeter": "cm",
+    "depth": "mm",
+    "volume": "cm3",
+    "world": "mm, z up; the drape is z = 0 around the body part and marker (folds further out)",
+}
 CAMERA_CONVENTIONS = {
     "model": "pinhole, no distortion",
     "extrinsics": "x_cam = R @ x_world + t (world->camera), camera x right, y down, z forward",
@@ -42,21 +48,21 @@ DEFINITIONS = {
     "mean_depth_mm": "area-weighted mean inward displacement over the undisplaced burn surface",
     "volume_cm3": "volume enclosed between the undisplaced and displaced surfaces",
     "figures": "the headline figures are the quadrature values; checks gives both methods and their relative "
-               "differences",
+    "differences",
     "boundary": "s = r / R(theta) = 1 in the burn's polar chart; the colour blend alpha is 0.5 exactly there",
     "masks": "masks/view_NNN.png: 255 where more than half the pixel's area is burn (s <= 1 on the body part); "
-             "object_masks/: the same for any skin of the body part",
+    "object_masks/: the same for any skin of the body part",
     "burn_centre_world_mm": "burn centre on the undisplaced surface; the crater bottom is burn_centre - "
-                            "max_depth_mm * burn_normal_world",
+    "max_depth_mm * burn_normal_world",
     "burn_normal_world": "outward unit surface normal at the burn centre (undisplaced surface)",
     "burn_boundary_world_mm": f"{BOUNDARY_POINTS} boundary points, evenly spaced in the chart angle theta",
     "true_surface": f"true_surface.npz: vertices (float64 N x 3, world mm) and faces (int32 M x 3, counter-"
-                    f"clockwise seen from outside) of the displaced body-part surface for s <= {TRUE_SURFACE_REACH} "
-                    f"(clipped to smooth skin facing within 60 degrees of the burn normal), edges <= {TRUE_SURFACE_EDGE_MM} mm; burn_s (float64 N) is each vertex's "
-                    "s, with a ring of vertices exactly at s = 1: the burn is the faces whose vertices all have "
-                    "burn_s <= 1",
+    f"clockwise seen from outside) of the displaced body-part surface for s <= {TRUE_SURFACE_REACH} "
+    f"(clipped to smooth skin facing within 60 degrees of the burn normal), edges <= {TRUE_SURFACE_EDGE_MM} mm; burn_s (float64 N) is each vertex's "
+    "s, with a ring of vertices exactly at s = 1: the burn is the faces whose vertices all have "
+    "burn_s <= 1",
     "object_to_world": "4x4 rigid transform from the body part's own frame (the chart's) to the world",
-}  # fmt: skip
+}
 
 
 @dataclass(frozen=True)
@@ -67,8 +73,9 @@ class BurnFigures:
 
 def burn_figures(scene: Scene) -> BurnFigures:
     by_quadrature = truth.quadrature(scene.surface, scene.burn)
-    return BurnFigures(quadrature=by_quadrature,
-                       checks=truth.cross_checks(by_quadrature, truth.fine_mesh(scene.surface, scene.burn)))  # fmt: skip
+    return BurnFigures(
+        quadrature=by_quadrature, checks=truth.cross_checks(by_quadrature, truth.fine_mesh(scene.surface, scene.burn))
+    )
 
 
 def true_surface(scene: Scene) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -85,8 +92,9 @@ def true_surface(scene: Scene) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
     edge = TRUE_SURFACE_EDGE_MM
     for _ in range(4):
-        mesh = adaptive_ring_mesh(lambda s, t: displaced_point(surface, burn, s, t), TRUE_SURFACE_REACH, edge,
-                                  keep=kept)  # fmt: skip
+        mesh = adaptive_ring_mesh(
+            lambda s, t: displaced_point(surface, burn, s, t), TRUE_SURFACE_REACH, edge, keep=kept
+        )
         faces, old = compact(kept(mesh.s, mesh.theta), mesh.faces)
         vertices = displaced_point(surface, burn, mesh.s[old], mesh.theta[old])
         longest = float(edge_lengths(vertices, faces).max())
@@ -105,8 +113,12 @@ def write_true_surface(path: Path, vertices: np.ndarray, faces: np.ndarray, burn
             with archive.open(f"{name}.npy", "w", force_zip64=True) as member:
                 np.lib.format.write_array(member, array, allow_pickle=False)
     inside = (burn_s[faces] <= 1.0).all(axis=1)
-    return {"area_mm2": float(triangle_areas(vertices, faces[inside]).sum()), "vertices": len(vertices),
-            "triangles": len(faces), "max_edge_mm": float(edge_lengths(vertices, faces).max())}  # fmt: skip
+    return {
+        "area_mm2": float(triangle_areas(vertices, faces[inside]).sum()),
+        "vertices": len(vertices),
+        "triangles": len(faces),
+        "max_edge_mm": float(edge_lengths(vertices, faces).max()),
+    }
 
 
 def _numpy_scalar(obj: Any) -> Any:
@@ -125,12 +137,20 @@ def encode_json(document: Any) -> bytes:
 
 def camera_record(camera: Camera) -> PhantomCamera:
     hfov = math.degrees(2 * math.atan(camera.width / 2 / camera.K[0, 0]))
-    return PhantomCamera(name=camera.name, width=camera.width, height=camera.height, K=camera.K.tolist(),
-                         R=camera.R.tolist(), t=camera.t.tolist(), hfov_deg=hfov)  # fmt: skip
+    return PhantomCamera(
+        name=camera.name,
+        width=camera.width,
+        height=camera.height,
+        K=camera.K.tolist(),
+        R=camera.R.tolist(),
+        t=camera.t.tolist(),
+        hfov_deg=hfov,
+    )
 
 
-def session_truth(scene: Scene, figures: BurnFigures, cameras: list[Camera], scene_info: dict[str, Any],
-                  generator: str) -> PhantomTruth:  # fmt: skip
+def session_truth(
+    scene: Scene, figures: BurnFigures, cameras: list[Camera], scene_info: dict[str, Any], generator: str
+) -> PhantomTruth:
     q = figures.quadrature
     centre, normal = scene.burn_centre_world()
     strip = scene.strip.describe()

@@ -66,12 +66,18 @@ class MarkerStrip:
         return vertices, faces, ab
 
     def describe(self) -> dict[str, Any]:
-        return {"dictionary": DICTIONARY, "ids": list(self.ids), "side_mm": SIDE_MM, "gap_mm": GAP_MM,
-                "white_margin_mm": MARGIN_MM, "strip_size_mm": list(self.size_mm),
-                "placement": f"flat on the drape, printed face {THICKNESS_MM} mm above z = 0",
-                "corner_order": "OpenCV ArUco order: top-left, top-right, bottom-right, bottom-left of the marker "
-                                "image (as seen from above)",
-                "corners_world_mm": {str(i): c.tolist() for i, c in self.corners().items()}}  # fmt: skip
+        return {
+            "dictionary": DICTIONARY,
+            "ids": list(self.ids),
+            "side_mm": SIDE_MM,
+            "gap_mm": GAP_MM,
+            "white_margin_mm": MARGIN_MM,
+            "strip_size_mm": list(self.size_mm),
+            "placement": f"flat on the drape, printed face {THICKNESS_MM} mm above z = 0",
+            "corner_order": "OpenCV ArUco order: top-left, top-right, bottom-right, bottom-left of the marker "
+            "image (as seen from above)",
+            "corners_world_mm": {str(i): c.tolist() for i, c in self.corners().items()},
+        }
 
 
 def strip_texture(ids: tuple[int, int, int], rng: np.random.Generator) -> ChartTexture:
@@ -96,8 +102,9 @@ def choose_ids(rng: np.random.Generator) -> tuple[int, int, int]:
     return a, b, c
 
 
-def place_strip(ids: tuple[int, int, int], footprint: np.ndarray, burn_xy: np.ndarray, axis_xy: np.ndarray,
-                rng: np.random.Generator) -> MarkerStrip:  # fmt: skip
+def place_strip(
+    ids: tuple[int, int, int], footprint: np.ndarray, burn_xy: np.ndarray, axis_xy: np.ndarray, rng: np.random.Generator
+) -> MarkerStrip:
     """Beside the body part, 15-40 mm from its footprint, roughly level with the burn.
 
     `footprint` is the boolean placement raster of the body part; `axis_xy` its long axis.
@@ -108,8 +115,9 @@ def place_strip(ids: tuple[int, int, int], footprint: np.ndarray, burn_xy: np.nd
     gap = rng.uniform(15.0, 40.0)
     side = np.array([-axis_xy[1], axis_xy[0]]) * rng.choice([-1.0, 1.0])
     turn = math.radians(rng.uniform(-25.0, 25.0))
-    out_dir = np.array([math.cos(turn) * side[0] - math.sin(turn) * side[1],
-                        math.sin(turn) * side[0] + math.cos(turn) * side[1]])  # fmt: skip
+    out_dir = np.array(
+        [math.cos(turn) * side[0] - math.sin(turn) * side[1], math.sin(turn) * side[0] + math.cos(turn) * side[1]]
+    )
     along = np.array([out_dir[1], -out_dir[0]])  # the strip's long side, so its print faces away from the body
     w, h = 3 * SIDE_MM + 2 * GAP_MM + 2 * MARGIN_MM, SIDE_MM + 2 * MARGIN_MM
     a, b = np.meshgrid(np.linspace(0, w, 42), np.linspace(0, h, 17))

@@ -59,8 +59,14 @@ def ring_mesh(ring_s: np.ndarray, ring_counts: np.ndarray) -> RingMesh:
     return RingMesh(s=s, theta=theta, faces=np.concatenate(faces).astype(np.int64))
 
 
-def adaptive_ring_mesh(chart: ChartMap, s_max: float, edge_mm: float, *, ring_at_one: bool = True,
-                       keep: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None) -> RingMesh:  # fmt: skip
+def adaptive_ring_mesh(
+    chart: ChartMap,
+    s_max: float,
+    edge_mm: float,
+    *,
+    ring_at_one: bool = True,
+    keep: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None,
+) -> RingMesh:
     """Ring mesh of (s, theta) in [0, s_max] x [0, 2 pi) whose surface edges are about `edge_mm` or shorter.
 
     Ring spacing follows the surface's radial stretch |dX/ds| and each ring's point count its
@@ -112,16 +118,18 @@ def triangle_areas(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
 
 
 def edge_lengths(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
-    return np.concatenate([np.linalg.norm(vertices[faces[:, (k + 1) % 3]] - vertices[faces[:, k]], axis=1)
-                           for k in range(3)])  # fmt: skip
+    return np.concatenate(
+        [np.linalg.norm(vertices[faces[:, (k + 1) % 3]] - vertices[faces[:, k]], axis=1) for k in range(3)]
+    )
 
 
 def vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     """Area-weighted vertex normals (unit; zero where no face has area)."""
     v0, v1, v2 = vertices[faces[:, 0]], vertices[faces[:, 1]], vertices[faces[:, 2]]
     face_n = np.cross(v1 - v0, v2 - v0)
-    normals = np.stack([sum(np.bincount(faces[:, k], face_n[:, axis], len(vertices)) for k in range(3))
-                        for axis in range(3)], axis=1)  # fmt: skip
+    normals = np.stack(
+        [sum(np.bincount(faces[:, k], face_n[:, axis], len(vertices)) for k in range(3)) for axis in range(3)], axis=1
+    )
     length = np.linalg.norm(normals, axis=1, keepdims=True)
     return np.divide(normals, length, out=np.zeros_like(normals), where=length > 0)
 

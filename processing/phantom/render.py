@@ -122,8 +122,15 @@ def _light_disc(direction: np.ndarray, spread_deg: float, rng: np.random.Generat
     return (table / np.linalg.norm(table, axis=1, keepdims=True)).astype(np.float32)
 
 
-def _key_visibility(scene: Scene, position: np.ndarray, n: np.ndarray, lit: np.ndarray, gid: int,
-                    disc: np.ndarray, rng: np.random.Generator) -> np.ndarray:  # fmt: skip
+def _key_visibility(
+    scene: Scene,
+    position: np.ndarray,
+    n: np.ndarray,
+    lit: np.ndarray,
+    gid: int,
+    disc: np.ndarray,
+    rng: np.random.Generator,
+) -> np.ndarray:
     if gid == DRAPE:  # the drape's folds are too gentle to shade themselves: only the body part's shadow falls on it
         x0, x1, y0, y1 = scene.shadow_box
         lit = lit & (position[0] > x0) & (position[0] < x1) & (position[1] > y0) & (position[1] < y1)
@@ -137,9 +144,19 @@ def _key_visibility(scene: Scene, position: np.ndarray, n: np.ndarray, lit: np.n
     return visible
 
 
-def _shade(scene: Scene, layer: Layer, gid: int, wrap: float, origin: np.ndarray, directions: np.ndarray,
-           t_hit: np.ndarray, prim: np.ndarray, bary: np.ndarray, disc: np.ndarray, rng: np.random.Generator
-           ) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+def _shade(
+    scene: Scene,
+    layer: Layer,
+    gid: int,
+    wrap: float,
+    origin: np.ndarray,
+    directions: np.ndarray,
+    t_hit: np.ndarray,
+    prim: np.ndarray,
+    bary: np.ndarray,
+    disc: np.ndarray,
+    rng: np.random.Generator,
+) -> tuple[np.ndarray, np.ndarray]:
     """(3, K) linear radiance and (2, K) texture coordinates of the hits on one layer."""
     lights = scene.lights
     key_dir, fill_dir = lights.key_dir.astype(np.float32), lights.fill_dir.astype(np.float32)
@@ -153,8 +170,9 @@ def _shade(scene: Scene, layer: Layer, gid: int, wrap: float, origin: np.ndarray
     ambient = lights.ambient * (0.7 + 0.3 * n[2])
     key = lights.key * np.maximum((n_key + wrap) / (1.0 + wrap), 0.0) * visible
     fill = lights.fill * np.maximum((_dot(n, fill_dir) + wrap) / (1.0 + wrap), 0.0)
-    radiance = np.stack([texel[c] * (AMBIENT_COLOUR[c] * ambient + KEY_COLOUR[c] * key + FILL_COLOUR[c] * fill)
-                         for c in range(3)])  # fmt: skip
+    radiance = np.stack(
+        [texel[c] * (AMBIENT_COLOUR[c] * ambient + KEY_COLOUR[c] * key + FILL_COLOUR[c] * fill) for c in range(3)]
+    )
     glossy = np.flatnonzero((texel[3] > 0) & (n_key > 0) & (visible > 0))
     if len(glossy):
         half = _normalise(key_dir[:, None] - directions[:, glossy])
@@ -187,8 +205,9 @@ def render_view(scene: Scene, camera: Camera, supersample: float, rng: np.random
             idx = np.flatnonzero(geometry == gid)
             if len(idx) == 0:
                 continue
-            radiance, uv = _shade(scene, layer, gid, wrap, origin, directions[:, idx], t_hit[idx], prim[idx],
-                                  bary[idx], disc, rng)  # fmt: skip
+            radiance, uv = _shade(
+                scene, layer, gid, wrap, origin, directions[:, idx], t_hit[idx], prim[idx], bary[idx], disc, rng
+            )
             image[:, offset + idx] = radiance
             if gid == BODY:
                 body[offset + idx] = 1.0
@@ -196,8 +215,9 @@ def render_view(scene: Scene, camera: Camera, supersample: float, rng: np.random
                 burn[offset + idx] = s <= 1.0
 
     size = (camera.width, camera.height)
-    linear = cv2.resize(np.ascontiguousarray(image.reshape(3, hs, ws).transpose(1, 2, 0)), size,
-                        interpolation=cv2.INTER_AREA)  # fmt: skip
+    linear = cv2.resize(
+        np.ascontiguousarray(image.reshape(3, hs, ws).transpose(1, 2, 0)), size, interpolation=cv2.INTER_AREA
+    )
     burn_mask = cv2.resize(burn.reshape(hs, ws), size, interpolation=cv2.INTER_AREA) > 0.5
     object_mask = cv2.resize(body.reshape(hs, ws), size, interpolation=cv2.INTER_AREA) > 0.5
     return RenderedView(linear=linear, burn_mask=burn_mask, object_mask=object_mask)

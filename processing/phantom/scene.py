@@ -40,8 +40,14 @@ class Layer:
 
 
 def make_layer(vertices: np.ndarray, faces: np.ndarray, uv: np.ndarray, normals: np.ndarray) -> Layer:
-    return Layer(vertices=vertices, faces=faces, uv=uv, normals=normals, face_uv=uv[faces].astype(np.float32),
-                 face_normals=normals[faces].astype(np.float32))  # fmt: skip
+    return Layer(
+        vertices=vertices,
+        faces=faces,
+        uv=uv,
+        normals=normals,
+        face_uv=uv[faces].astype(np.float32),
+        face_normals=normals[faces].astype(np.float32),
+    )
 
 
 @dataclass(frozen=True)
@@ -57,24 +63,36 @@ class Lights:
     """Half-angle of the key light's disc: soft shadow edges."""
 
     def describe(self) -> dict[str, Any]:
-        return {"model": "linear-light Lambert (wrapped a little on skin) + Blinn-Phong specular, directional key "
-                         "and fill, hemispheric ambient; the key casts soft shadows (jittered shadow rays)",
-                "key_dir_world": self.key_dir.tolist(), "key": self.key, "fill_dir_world": self.fill_dir.tolist(),
-                "fill": self.fill, "ambient": self.ambient, "shininess": self.shininess,
-                "key_spread_deg": self.key_spread_deg}  # fmt: skip
+        return {
+            "model": "linear-light Lambert (wrapped a little on skin) + Blinn-Phong specular, directional key "
+            "and fill, hemispheric ambient; the key casts soft shadows (jittered shadow rays)",
+            "key_dir_world": self.key_dir.tolist(),
+            "key": self.key,
+            "fill_dir_world": self.fill_dir.tolist(),
+            "fill": self.fill,
+            "ambient": self.ambient,
+            "shininess": self.shininess,
+            "key_spread_deg": self.key_spread_deg,
+        }
 
 
 def _direction(azimuth: float, elevation: float) -> np.ndarray:
-    return np.array([math.cos(elevation) * math.cos(azimuth), math.cos(elevation) * math.sin(azimuth),
-                     math.sin(elevation)])  # fmt: skip
+    return np.array(
+        [math.cos(elevation) * math.cos(azimuth), math.cos(elevation) * math.sin(azimuth), math.sin(elevation)]
+    )
 
 
 def sample_lights(rng: np.random.Generator) -> Lights:
     azimuth = rng.uniform(0, 2 * math.pi)
-    return Lights(key_dir=_direction(azimuth, math.radians(rng.uniform(45, 70))), key=float(rng.uniform(0.85, 1.0)),
-                  fill_dir=_direction(azimuth + math.pi + rng.uniform(-0.6, 0.6), math.radians(rng.uniform(35, 60))),
-                  fill=float(rng.uniform(0.18, 0.3)), ambient=float(rng.uniform(0.22, 0.32)), shininess=40.0,
-                  key_spread_deg=2.0)  # fmt: skip
+    return Lights(
+        key_dir=_direction(azimuth, math.radians(rng.uniform(45, 70))),
+        key=float(rng.uniform(0.85, 1.0)),
+        fill_dir=_direction(azimuth + math.pi + rng.uniform(-0.6, 0.6), math.radians(rng.uniform(35, 60))),
+        fill=float(rng.uniform(0.18, 0.3)),
+        ambient=float(rng.uniform(0.22, 0.32)),
+        shininess=40.0,
+        key_spread_deg=2.0,
+    )
 
 
 @dataclass
@@ -141,9 +159,17 @@ def _footprint(body: Layer) -> np.ndarray:
     return cv2.dilate(raster, np.ones((3, 3), np.uint8)).astype(bool)
 
 
-def build_scene(surface: Surface, burn: Burn, object_to_world: np.ndarray, body_texture: ChartTexture,
-                cloth: DrapeCloth, marker_texture: ChartTexture, marker_ids: tuple[int, int, int],
-                spacing_mm: float, rng: np.random.Generator) -> Scene:  # fmt: skip
+def build_scene(
+    surface: Surface,
+    burn: Burn,
+    object_to_world: np.ndarray,
+    body_texture: ChartTexture,
+    cloth: DrapeCloth,
+    marker_texture: ChartTexture,
+    marker_ids: tuple[int, int, int],
+    spacing_mm: float,
+    rng: np.random.Generator,
+) -> Scene:
     body = body_layer(surface, burn, object_to_world, spacing_mm)
     footprint = _footprint(body)
     centre = transform(object_to_world, surface.real_point(*[np.array([c]) for c in burn.centre]))[0]
@@ -162,15 +188,28 @@ def build_scene(surface: Surface, burn: Burn, object_to_world: np.ndarray, body_
 
     raycaster = o3d.t.geometry.RaycastingScene()
     for layer in (body, drape, marker):
-        raycaster.add_triangles(o3d.core.Tensor(layer.vertices.astype(np.float32)),
-                                o3d.core.Tensor(layer.faces.astype(np.uint32)))  # fmt: skip
+        raycaster.add_triangles(
+            o3d.core.Tensor(layer.vertices.astype(np.float32)), o3d.core.Tensor(layer.faces.astype(np.uint32))
+        )
     lights = sample_lights(rng)
     # The drape's folds are too gentle to shade themselves, so only the body part casts shadows on it.
     reach = body.vertices[:, 2].max() / math.tan(math.asin(lights.key_dir[2])) + 15.0
     lo, hi = body.vertices[:, :2].min(axis=0) - reach, body.vertices[:, :2].max(axis=0) + reach
     grid = grid_axis()
-    return Scene(surface=surface, burn=burn, object_to_world=object_to_world, body=body, drape=drape, marker=marker,
-                 body_texture=body_texture, cloth=cloth, marker_texture=marker_texture, strip=strip, lights=lights,
-                 raycaster=raycaster, drape_axis=grid,
-                 drape_normal_map=drape.normals.reshape(len(grid), len(grid), 3).astype(np.float32),
-                 shadow_box=(float(lo[0]), float(hi[0]), float(lo[1]), float(hi[1])))  # fmt: skip
+    return Scene(
+        surface=surface,
+        burn=burn,
+        object_to_world=object_to_world,
+        body=body,
+        drape=drape,
+        marker=marker,
+        body_texture=body_texture,
+        cloth=cloth,
+        marker_texture=marker_texture,
+        strip=strip,
+        lights=lights,
+        raycaster=raycaster,
+        drape_axis=grid,
+        drape_normal_map=drape.normals.reshape(len(grid), len(grid), 3).astype(np.float32),
+        shadow_box=(float(lo[0]), float(hi[0]), float(lo[1]), float(hi[1])),
+    )

@@ -57,15 +57,25 @@ def series_document(
     listing = []
     for stage, contraction, truth in sessions:
         to_world = np.array(truth.object_to_world)
-        listing.append({
-            "day": stage.day, "dir": stage.folder, "contraction_factor": contraction,
-            "target_area_ratio": stage.area_ratio, "depth_ratio": stage.depth_ratio, "healing": stage.healing,
-            "object_to_world": truth.object_to_world,
-            "burn_area_cm2": truth.burn_area_cm2, "burn_perimeter_cm": truth.burn_perimeter_cm,
-            "max_depth_mm": truth.max_depth_mm, "mean_depth_mm": truth.mean_depth_mm, "volume_cm3": truth.volume_cm3,
-            "reference_area_cm2": truth.reference_area_cm2, "area_ratio_vs_day0": truth.burn_area_cm2 / area0,
-            "world_day0_to_world_this": (to_world @ np.linalg.inv(day0)).tolist(),
-        })  # fmt: skip
+        listing.append(
+            {
+                "day": stage.day,
+                "dir": stage.folder,
+                "contraction_factor": contraction,
+                "target_area_ratio": stage.area_ratio,
+                "depth_ratio": stage.depth_ratio,
+                "healing": stage.healing,
+                "object_to_world": truth.object_to_world,
+                "burn_area_cm2": truth.burn_area_cm2,
+                "burn_perimeter_cm": truth.burn_perimeter_cm,
+                "max_depth_mm": truth.max_depth_mm,
+                "mean_depth_mm": truth.mean_depth_mm,
+                "volume_cm3": truth.volume_cm3,
+                "reference_area_cm2": truth.reference_area_cm2,
+                "area_ratio_vs_day0": truth.burn_area_cm2 / area0,
+                "world_day0_to_world_this": (to_world @ np.linalg.inv(day0)).tolist(),
+            }
+        )
     return {
         "format": PHANTOM_SERIES_FORMAT,
         "generator": generator,
@@ -73,9 +83,9 @@ def series_document(
         "spec": msgspec.to_builtins(spec),
         "object_frame": "the surface chart frame; world_i = object_to_world_i @ x_object",
         "shrink_model": "burn outline contracted toward its chart centre by contraction_factor (R0 solved for the "
-                        "target area ratio); crater depth scaled by depth_ratio; healing tints the burn toward pink",
+        "target area ratio); crater depth scaled by depth_ratio; healing tints the burn toward pink",
         "motion_model": f"day 0 identity; later sessions turn the limb about the vertical by up to {MAX_TURN_DEG:g} "
-                        f"degrees and shift it by up to {MAX_SHIFT_MM:g} mm on the drape; the drape and marker are "
-                        "laid out again each session",
+        f"degrees and shift it by up to {MAX_SHIFT_MM:g} mm on the drape; the drape and marker are "
+        "laid out again each session",
         "sessions": listing,
-    }  # fmt: skip
+    }

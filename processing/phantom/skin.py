@@ -29,14 +29,31 @@ from processing.phantom.textures import (
 from schemas.phantom import BurnLook, SkinTone
 
 TONE_SRGB = {
-    SkinTone.I: (0.96, 0.83, 0.75), SkinTone.II: (0.91, 0.74, 0.63), SkinTone.III: (0.82, 0.62, 0.50),
-    SkinTone.IV: (0.68, 0.48, 0.34), SkinTone.V: (0.50, 0.33, 0.22), SkinTone.VI: (0.33, 0.22, 0.16),
-}  # fmt: skip
-FRECKLES_PER_CM2 = {SkinTone.I: 2.5, SkinTone.II: 2.2, SkinTone.III: 2.0, SkinTone.IV: 1.6, SkinTone.V: 1.3,
-                    SkinTone.VI: 1.0}  # fmt: skip
-BURN_SRGB = {"deep_red": (0.66, 0.09, 0.09), "red": (0.85, 0.24, 0.23), "pink": (0.94, 0.62, 0.60),
-             "white": (0.94, 0.91, 0.85), "tan": (0.60, 0.40, 0.27), "eschar": (0.18, 0.10, 0.07),
-             "healed": (0.90, 0.58, 0.56), "blister": (0.95, 0.92, 0.78)}  # fmt: skip
+    SkinTone.I: (0.96, 0.83, 0.75),
+    SkinTone.II: (0.91, 0.74, 0.63),
+    SkinTone.III: (0.82, 0.62, 0.50),
+    SkinTone.IV: (0.68, 0.48, 0.34),
+    SkinTone.V: (0.50, 0.33, 0.22),
+    SkinTone.VI: (0.33, 0.22, 0.16),
+}
+FRECKLES_PER_CM2 = {
+    SkinTone.I: 2.5,
+    SkinTone.II: 2.2,
+    SkinTone.III: 2.0,
+    SkinTone.IV: 1.6,
+    SkinTone.V: 1.3,
+    SkinTone.VI: 1.0,
+}
+BURN_SRGB = {
+    "deep_red": (0.66, 0.09, 0.09),
+    "red": (0.85, 0.24, 0.23),
+    "pink": (0.94, 0.62, 0.60),
+    "white": (0.94, 0.91, 0.85),
+    "tan": (0.60, 0.40, 0.27),
+    "eschar": (0.18, 0.10, 0.07),
+    "healed": (0.90, 0.58, 0.56),
+    "blister": (0.95, 0.92, 0.78),
+}
 EDGE_WIDTH_MM = 1.5
 """10-90 % width of the burn's colour edge."""
 LOOKS = {
@@ -63,8 +80,9 @@ def skin_texture(surface: Surface, tone: SkinTone, texel_mm: float, rng: np.rand
     base = srgb_to_linear(TONE_SRGB[tone])
     # Fine grain (0.25-0.5 mm) is the "orange peel" a sharp photo of skin shows; it carries most of the texture
     # SfM matches and the quality gate's sharpness figure.
-    brightness = np.exp(0.07 * noise(25.0) + 0.05 * noise(6.0) + 0.06 * noise(1.5) + 0.11 * noise(0.5)
-                        + 0.09 * noise(0.25))  # fmt: skip
+    brightness = np.exp(
+        0.07 * noise(25.0) + 0.05 * noise(6.0) + 0.06 * noise(1.5) + 0.11 * noise(0.5) + 0.09 * noise(0.25)
+    )
     # Redness only ever adds red: a symmetric term would tint the low side olive.
     redness = np.maximum(0.05 * noise(10.0) + 0.025 * noise(2.0) + 0.02, 0.0)
     albedo = np.empty((*shape, 4), np.float32)
@@ -77,17 +95,35 @@ def skin_texture(surface: Surface, tone: SkinTone, texel_mm: float, rng: np.rand
         albedo[..., :3] *= 1.0 - coverage[..., None] * (1.0 - colour)
 
     n_pores = int(25 * area_cm2)
-    darken(draw_dots(shape, rng.uniform([0, 0], [shape[1], shape[0]], (n_pores, 2)),
-                     rng.uniform(0.08, 0.2, n_pores) * mm, rng.uniform(0.25, 0.5, n_pores)),
-           np.array([0.55, 0.5, 0.5], np.float32))  # fmt: skip
+    darken(
+        draw_dots(
+            shape,
+            rng.uniform([0, 0], [shape[1], shape[0]], (n_pores, 2)),
+            rng.uniform(0.08, 0.2, n_pores) * mm,
+            rng.uniform(0.25, 0.5, n_pores),
+        ),
+        np.array([0.55, 0.5, 0.5], np.float32),
+    )
     n_specks = int(3 * area_cm2)
-    darken(draw_dots(shape, rng.uniform([0, 0], [shape[1], shape[0]], (n_specks, 2)),
-                     rng.uniform(0.15, 0.35, n_specks) * mm, rng.uniform(0.2, 0.45, n_specks)),
-           np.array([0.5, 0.42, 0.38], np.float32))  # fmt: skip
+    darken(
+        draw_dots(
+            shape,
+            rng.uniform([0, 0], [shape[1], shape[0]], (n_specks, 2)),
+            rng.uniform(0.15, 0.35, n_specks) * mm,
+            rng.uniform(0.2, 0.45, n_specks),
+        ),
+        np.array([0.5, 0.42, 0.38], np.float32),
+    )
     n_freckles = int(FRECKLES_PER_CM2[tone] * area_cm2)
-    darken(draw_dots(shape, rng.uniform([0, 0], [shape[1], shape[0]], (n_freckles, 2)),
-                     rng.lognormal(math.log(0.4), 0.45, n_freckles) * mm, rng.uniform(0.35, 0.8, n_freckles)),
-           np.array([0.45, 0.38, 0.34], np.float32))  # fmt: skip
+    darken(
+        draw_dots(
+            shape,
+            rng.uniform([0, 0], [shape[1], shape[0]], (n_freckles, 2)),
+            rng.lognormal(math.log(0.4), 0.45, n_freckles) * mm,
+            rng.uniform(0.35, 0.8, n_freckles),
+        ),
+        np.array([0.45, 0.38, 0.34], np.float32),
+    )
     n_hairs = int(surface.hair_density_per_cm2 * area_cm2)
     hairs = random_strands(rng, n_hairs, shape, (3.0 * mm, 11.0 * mm), surface.hair_angle_deg, 18.0)
     darken(draw_strands(shape, hairs, rng.uniform(0.35, 0.75, n_hairs)), srgb_to_linear((0.16, 0.11, 0.08)))
@@ -134,13 +170,21 @@ def apply_burn(
         6.0 * (-0.8 * n2 + 0.4 * n3 - 1.3 + 0.5 * centre_bias) + 2.0 * (tan_w - 1.0)
     )
     n_blisters = int(0.6 * blister_w * (r1 - r0) * (c1 - c0) * t * t / 100)
-    blisters = draw_dots(shape, rng.uniform([0, 0], [shape[1], shape[0]], (n_blisters, 2)),
-                         rng.uniform(0.6, 2.2, n_blisters) * mm, rng.uniform(0.4, 0.8, n_blisters))[..., None]  # fmt: skip
+    blisters = draw_dots(
+        shape,
+        rng.uniform([0, 0], [shape[1], shape[0]], (n_blisters, 2)),
+        rng.uniform(0.6, 2.2, n_blisters) * mm,
+        rng.uniform(0.4, 0.8, n_blisters),
+    )[..., None]
     blisters *= fresh
     c = c + (col["blister"] - c) * blisters
     n_specks = int(4.0 * eschar_w * (r1 - r0) * (c1 - c0) * t * t / 100)
-    specks = draw_dots(shape, rng.uniform([0, 0], [shape[1], shape[0]], (n_specks, 2)),
-                       rng.uniform(0.12, 0.35, n_specks) * mm, rng.uniform(0.5, 0.9, n_specks))[..., None]  # fmt: skip
+    specks = draw_dots(
+        shape,
+        rng.uniform([0, 0], [shape[1], shape[0]], (n_specks, 2)),
+        rng.uniform(0.12, 0.35, n_specks) * mm,
+        rng.uniform(0.5, 0.9, n_specks),
+    )[..., None]
     c = c + (col["eschar"] - c) * specks * (0.3 + 0.7 * fresh)
     c = c * (1.0 + 0.06 * n4)
     c = c + (col["healed"] - c) * 0.8 * healing
@@ -155,8 +199,14 @@ def apply_burn(
 
 
 def appearance(tone: SkinTone, healing: float) -> dict[str, Any]:
-    return {"skin_tone": tone.value, "skin_srgb": list(TONE_SRGB[tone]), "healing": healing,
-            "edge_width_mm_10_90": EDGE_WIDTH_MM, "halo": HALO, "halo_decay_mm": HALO_MM,
-            "burn_palette_srgb": {k: list(v) for k, v in BURN_SRGB.items()},
-            "blend": "alpha = 1 / (1 + exp(-(1 - s) R(theta) / w)), w = edge_width / (2 ln 9): 0.5 at s = 1",
-            "texture": "in the body part's chart: view-consistent; freckles, pores, hairs, mottling"}  # fmt: skip
+    return {
+        "skin_tone": tone.value,
+        "skin_srgb": list(TONE_SRGB[tone]),
+        "healing": healing,
+        "edge_width_mm_10_90": EDGE_WIDTH_MM,
+        "halo": HALO,
+        "halo_decay_mm": HALO_MM,
+        "burn_palette_srgb": {k: list(v) for k, v in BURN_SRGB.items()},
+        "blend": "alpha = 1 / (1 + exp(-(1 - s) R(theta) / w)), w = edge_width / (2 ln 9): 0.5 at s = 1",
+        "texture": "in the body part's chart: view-consistent; freckles, pores, hairs, mottling",
+    }

@@ -125,11 +125,17 @@ class Forearm(Surface):
         return self.rho * (math.pi + float(rng.uniform(-0.25, 0.25))), float(rng.uniform(-25.0, 25.0))
 
     def describe(self):
-        return {"shape": self.shape.value, "semi_axis_y_mm": self.a, "semi_axis_z_mm": self.b,
-                "length_mm": self.length, "end_cap_mm": self.end_cap, "taper": self.taper,
-                "model": "y = a(x) c(x) sin(phi), z = b(x) (1 - c(x) cos(phi)), a(x) = a (1 - taper x / length), "
-                         "b(x) likewise, c(x) the rounded-end profile (1 except within end_cap_mm of an end)",
-                "chart": f"p = {self.rho:.6g} mm * phi (phi = 0 bottom, pi top), q = x"}  # fmt: skip
+        return {
+            "shape": self.shape.value,
+            "semi_axis_y_mm": self.a,
+            "semi_axis_z_mm": self.b,
+            "length_mm": self.length,
+            "end_cap_mm": self.end_cap,
+            "taper": self.taper,
+            "model": "y = a(x) c(x) sin(phi), z = b(x) (1 - c(x) cos(phi)), a(x) = a (1 - taper x / length), "
+            "b(x) likewise, c(x) the rounded-end profile (1 except within end_cap_mm of an end)",
+            "chart": f"p = {self.rho:.6g} mm * phi (phi = 0 bottom, pi top), q = x",
+        }
 
 
 class HeightField(Surface):
@@ -190,14 +196,22 @@ class Patch(HeightField):
         self.a, self.b = float(rng.uniform(125.0, 140.0)), float(rng.uniform(90.0, 100.0))
         self.c = float(rng.uniform(62.0, 75.0))
         self.zc = -self.c * float(rng.uniform(0.22, 0.32))
-        self.swellings = [(float(rng.uniform(-50, 50)), float(rng.uniform(-35, 35)), float(rng.uniform(-3, 3)),
-                           float(rng.uniform(35, 55))) for _ in range(2)]  # fmt: skip
+        self.swellings = [
+            (
+                float(rng.uniform(-50, 50)),
+                float(rng.uniform(-35, 35)),
+                float(rng.uniform(-3, 3)),
+                float(rng.uniform(35, 55)),
+            )
+            for _ in range(2)
+        ]
         self.hair_angle_deg = float(rng.uniform(60.0, 120.0))
 
     def height(self, x, y):
         inside = 1.0 - (x / self.a) ** 2 - (y / self.b) ** 2
-        bumps = sum(amp * np.exp(-((x - cx) ** 2 + (y - cy) ** 2) / (2 * sig**2))
-                    for cx, cy, amp, sig in self.swellings)  # fmt: skip
+        bumps = sum(
+            amp * np.exp(-((x - cx) ** 2 + (y - cy) ** 2) / (2 * sig**2)) for cx, cy, amp, sig in self.swellings
+        )
         return self.zc + self.c * np.sqrt(inside) + bumps * inside**2
 
     def domain_radius(self, psi):
@@ -207,11 +221,15 @@ class Patch(HeightField):
         return float(rng.uniform(-25.0, 25.0)), float(rng.uniform(-15.0, 15.0))
 
     def describe(self):
-        return {"shape": self.shape.value, "semi_axes_mm": [self.a, self.b, self.c], "centre_z_mm": self.zc,
-                "swellings": [{"x_mm": x, "y_mm": y, "amp_mm": a, "sigma_mm": s} for x, y, a, s in self.swellings],
-                "model": "z = centre_z + c sqrt(w) + w^2 sum amp exp(-|xy - centre|^2 / (2 sigma^2)), "
-                         "w = 1 - (x/a)^2 - (y/b)^2; the part with z > 0",
-                "chart": "p = x, q = y (height field)"}  # fmt: skip
+        return {
+            "shape": self.shape.value,
+            "semi_axes_mm": [self.a, self.b, self.c],
+            "centre_z_mm": self.zc,
+            "swellings": [{"x_mm": x, "y_mm": y, "amp_mm": a, "sigma_mm": s} for x, y, a, s in self.swellings],
+            "model": "z = centre_z + c sqrt(w) + w^2 sum amp exp(-|xy - centre|^2 / (2 sigma^2)), "
+            "w = 1 - (x/a)^2 - (y/b)^2; the part with z > 0",
+            "chart": "p = x, q = y (height field)",
+        }
 
 
 class Foot(HeightField):
@@ -226,9 +244,15 @@ class Foot(HeightField):
         self.h = float(rng.uniform(48.0, 56.0))
         self.zc = -8.0
         self.slope = float(rng.uniform(0.1, 0.18))
-        self.bumps = [(float(rng.uniform(-80, 80)), float(rng.uniform(-35, 35)),
-                       float(rng.choice([-1, 1]) * rng.uniform(3.0, 6.5)), float(rng.uniform(9, 18)))
-                      for _ in range(8)]  # fmt: skip
+        self.bumps = [
+            (
+                float(rng.uniform(-80, 80)),
+                float(rng.uniform(-35, 35)),
+                float(rng.choice([-1, 1]) * rng.uniform(3.0, 6.5)),
+                float(rng.uniform(9, 18)),
+            )
+            for _ in range(8)
+        ]
 
     def height(self, x, y):
         inside = 1.0 - (x / self.a) ** 4 - (y / self.b) ** 4
@@ -242,12 +266,18 @@ class Foot(HeightField):
         return float(rng.uniform(-35.0, 20.0)), float(rng.uniform(-8.0, 8.0))
 
     def describe(self):
-        return {"shape": self.shape.value, "half_length_mm": self.a, "half_width_mm": self.b, "height_mm": self.h,
-                "base_z_mm": self.zc, "slope": self.slope,
-                "bumps": [{"x_mm": x, "y_mm": y, "amp_mm": a, "sigma_mm": s} for x, y, a, s in self.bumps],
-                "model": "z = base_z + height sqrt(w) (1 + slope x / a) + w^2 sum amp exp(-|xy - centre|^2 / "
-                         "(2 sigma^2)), w = 1 - (x/a)^4 - (y/b)^4; the part with z > 0",
-                "chart": "p = x, q = y (height field)"}  # fmt: skip
+        return {
+            "shape": self.shape.value,
+            "half_length_mm": self.a,
+            "half_width_mm": self.b,
+            "height_mm": self.h,
+            "base_z_mm": self.zc,
+            "slope": self.slope,
+            "bumps": [{"x_mm": x, "y_mm": y, "amp_mm": a, "sigma_mm": s} for x, y, a, s in self.bumps],
+            "model": "z = base_z + height sqrt(w) (1 + slope x / a) + w^2 sum amp exp(-|xy - centre|^2 / "
+            "(2 sigma^2)), w = 1 - (x/a)^4 - (y/b)^4; the part with z > 0",
+            "chart": "p = x, q = y (height field)",
+        }
 
 
 def make_surface(shape: PhantomShape, rng: np.random.Generator) -> Surface:

@@ -46,8 +46,12 @@ def sample_image(image: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndarray:
     return out.reshape(rows * width, -1)[:k]
 
 
-def texel_centres(shape: tuple[int, int], origin: tuple[float, float], texel_mm: float,
-                  window: tuple[int, int, int, int] | None = None) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+def texel_centres(
+    shape: tuple[int, int],
+    origin: tuple[float, float],
+    texel_mm: float,
+    window: tuple[int, int, int, int] | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
     """Chart coordinates (p, q) of texel centres, optionally of the window (row0, row1, col0, col1)."""
     r0, r1, c0, c1 = window or (0, shape[0], 0, shape[1])
     p = origin[0] + (np.arange(c0, c1) + 0.5) * texel_mm
@@ -86,8 +90,9 @@ def draw_dots(shape: tuple[int, int], centres_px: np.ndarray, radii_px: np.ndarr
     canvas = np.zeros(shape, np.uint8)
     scale = 1 << _SHIFT
     for (x, y), r, a in zip(centres_px, radii_px, strength, strict=True):
-        cv2.circle(canvas, (int(x * scale), int(y * scale)), max(1, int(r * scale)), int(255 * a), -1,
-                   cv2.LINE_AA, _SHIFT)  # fmt: skip
+        cv2.circle(
+            canvas, (int(x * scale), int(y * scale)), max(1, int(r * scale)), int(255 * a), -1, cv2.LINE_AA, _SHIFT
+        )
     return canvas.astype(np.float32) / 255.0
 
 
@@ -100,8 +105,14 @@ def draw_strands(shape: tuple[int, int], polylines_px: list[np.ndarray], strengt
     return canvas.astype(np.float32) / 255.0
 
 
-def random_strands(rng: np.random.Generator, count: int, shape: tuple[int, int], length_px: tuple[float, float],
-                   angle_deg: float, spread_deg: float) -> list[np.ndarray]:  # fmt: skip
+def random_strands(
+    rng: np.random.Generator,
+    count: int,
+    shape: tuple[int, int],
+    length_px: tuple[float, float],
+    angle_deg: float,
+    spread_deg: float,
+) -> list[np.ndarray]:
     """Gently curved strands of random length around a main direction."""
     start = rng.uniform([0, 0], [shape[1], shape[0]], size=(count, 2))
     length = rng.uniform(*length_px, size=count)

@@ -72,9 +72,17 @@ def quadrature(surface: Surface, burn: Burn, n_s: int = 96, n_theta: int = 1024)
     one = np.ones_like(theta)
     tangent = reference_point(surface, burn, one, theta + _H) - reference_point(surface, burn, one, theta - _H)
     perimeter = float(np.linalg.norm(tangent / (2 * _H), axis=-1).sum() * 2 * math.pi / n_perimeter)
-    return {"area_mm2": area, "ref_area_mm2": ref_area, "perimeter_mm": perimeter, "mean_depth_mm": mean_depth,
-            "volume_mm3": volume, "max_depth_mm": float(burn.displacement(np.zeros(1))[0]),
-            "n_s": n_s, "n_theta": n_theta, "n_perimeter": n_perimeter}  # fmt: skip
+    return {
+        "area_mm2": area,
+        "ref_area_mm2": ref_area,
+        "perimeter_mm": perimeter,
+        "mean_depth_mm": mean_depth,
+        "volume_mm3": volume,
+        "max_depth_mm": float(burn.displacement(np.zeros(1))[0]),
+        "n_s": n_s,
+        "n_theta": n_theta,
+        "n_perimeter": n_perimeter,
+    }
 
 
 def fine_mesh(surface: Surface, burn: Burn, edge_mm: float = 0.1) -> dict[str, Any]:
@@ -93,13 +101,17 @@ def fine_mesh(surface: Surface, burn: Burn, edge_mm: float = 0.1) -> dict[str, A
     ring = np.flatnonzero(mesh.s == 1.0)
     ring = ring[np.argsort(mesh.theta[ring])]
     boundary = x[ring]
-    return {"area_mm2": float(triangle_areas(y, mesh.faces).sum()), "ref_area_mm2": float(ref_tri.sum()),
-            "perimeter_mm": float(np.linalg.norm(np.roll(boundary, -1, axis=0) - boundary, axis=1).sum()),
-            "mean_depth_mm": float((ref_tri * depth[mesh.faces].mean(axis=1)).sum() / ref_tri.sum()),
-            "volume_mm3": abs(signed_volume(x) - signed_volume(y)),
-            "max_depth_mm": float(np.linalg.norm(y - x, axis=1).max()),
-            "vertices": len(mesh.s), "triangles": len(mesh.faces),
-            "max_edge_mm": float(edge_lengths(y, mesh.faces).max())}  # fmt: skip
+    return {
+        "area_mm2": float(triangle_areas(y, mesh.faces).sum()),
+        "ref_area_mm2": float(ref_tri.sum()),
+        "perimeter_mm": float(np.linalg.norm(np.roll(boundary, -1, axis=0) - boundary, axis=1).sum()),
+        "mean_depth_mm": float((ref_tri * depth[mesh.faces].mean(axis=1)).sum() / ref_tri.sum()),
+        "volume_mm3": abs(signed_volume(x) - signed_volume(y)),
+        "max_depth_mm": float(np.linalg.norm(y - x, axis=1).max()),
+        "vertices": len(mesh.s),
+        "triangles": len(mesh.faces),
+        "max_edge_mm": float(edge_lengths(y, mesh.faces).max()),
+    }
 
 
 def relative_difference(a: float, b: float) -> float:
@@ -109,9 +121,14 @@ def relative_difference(a: float, b: float) -> float:
 
 def cross_checks(by_quadrature: dict[str, Any], by_mesh: dict[str, Any]) -> dict[str, Any]:
     checks: dict[str, Any] = {"fine_mesh": by_mesh, "quadrature": by_quadrature}
-    for key, name in [("area_mm2", "area_rel_diff_mesh_vs_quadrature"), ("ref_area_mm2", "ref_area_rel_diff"),
-                      ("perimeter_mm", "perimeter_rel_diff"), ("volume_mm3", "volume_rel_diff"),
-                      ("mean_depth_mm", "mean_depth_rel_diff"), ("max_depth_mm", "max_depth_rel_diff")]:  # fmt: skip
+    for key, name in [
+        ("area_mm2", "area_rel_diff_mesh_vs_quadrature"),
+        ("ref_area_mm2", "ref_area_rel_diff"),
+        ("perimeter_mm", "perimeter_rel_diff"),
+        ("volume_mm3", "volume_rel_diff"),
+        ("mean_depth_mm", "mean_depth_rel_diff"),
+        ("max_depth_mm", "max_depth_rel_diff"),
+    ]:
         checks[name] = relative_difference(by_quadrature[key], by_mesh[key])
     checks["max_depth_on_fine_grid_mm"] = by_mesh["max_depth_mm"]
     return checks

@@ -83,8 +83,13 @@ class Stages:
     nothing stale outlives its rerun; its fingerprint is stored only once it has finished.
     """
 
-    def __init__(self, fingerprints_file: Path, done: dict[str, Path], wanted: dict[str, str],
-                 on_start: Callable[[str], None] | None = None):  # fmt: skip
+    def __init__(
+        self,
+        fingerprints_file: Path,
+        done: dict[str, Path],
+        wanted: dict[str, str],
+        on_start: Callable[[str], None] | None = None,
+    ):
         """`on_start(name)` is told of each stage as it begins (or is found finished): progress for a waiting user."""
         self.file, self.done, self.wanted, self.on_start = fingerprints_file, done, wanted, on_start
         self.order = list(done)

@@ -50,8 +50,14 @@ def run(conf: ReconstructionConfig, model_dir: Path, images_dir: Path, scale_pat
         sources = choose_sources(view, views, region, conf.stereo_sources)
         if not sources:
             continue
-        dm = stereo.depth_map(pictures[view.name], [pictures[s.name] for s in sources], region, conf.stereo_planes,
-                              conf.stereo_min_ncc, finest=1 if conf.stereo_full_resolution else 2)  # fmt: skip
+        dm = stereo.depth_map(
+            pictures[view.name],
+            [pictures[s.name] for s in sources],
+            region,
+            conf.stereo_planes,
+            conf.stereo_min_ncc,
+            finest=1 if conf.stereo_full_resolution else 2,
+        )
         if dm is not None and dm.valid.any():
             if not conf.stereo_full_resolution:
                 dm = _to_full_resolution(dm)
@@ -74,9 +80,14 @@ def run(conf: ReconstructionConfig, model_dir: Path, images_dir: Path, scale_pat
     o3d.io.write_point_cloud(str(tmp), cloud)
     tmp.replace(out_dir / POINTS)
     units = "mm" if scale.estimate.mm_per_unit else "model units"
-    info = DenseInfo(roi_centres=region.centres.tolist(), roi_radii=region.radii.tolist(),
-                     views_with_depth=len(maps), fused_points=len(points), units=units,
-                     units_per_mm=units_per_mm)  # fmt: skip
+    info = DenseInfo(
+        roi_centres=region.centres.tolist(),
+        roi_radii=region.radii.tolist(),
+        views_with_depth=len(maps),
+        fused_points=len(points),
+        units=units,
+        units_per_mm=units_per_mm,
+    )
     write_json(out_dir / INFO, info)
     log.info("dense: %d depth maps, %d fused points", len(maps), len(points))
     return out_dir / POINTS

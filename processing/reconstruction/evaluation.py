@@ -61,11 +61,16 @@ def evaluate(analysis: Path, phantom: Path) -> Accuracy:
     else:
         distances, method = _truth_points_to_mesh(vertices, faces, truth), "true-points-to-mesh"
     return Accuracy(
-        phantom=phantom.name, views=len(truth["cameras"]), registered=placement.registered,
-        scale_error=placement.scale_error, camera_rms_mm=placement.camera_rms_mm,
-        surface_median_mm=float(np.median(distances)), surface_p95_mm=float(np.percentile(distances, 95)),
-        surface_samples=len(distances), surface_method=method,
-    )  # fmt: skip
+        phantom=phantom.name,
+        views=len(truth["cameras"]),
+        registered=placement.registered,
+        scale_error=placement.scale_error,
+        camera_rms_mm=placement.camera_rms_mm,
+        surface_median_mm=float(np.median(distances)),
+        surface_p95_mm=float(np.percentile(distances, 95)),
+        surface_samples=len(distances),
+        surface_method=method,
+    )
 
 
 def sparse_baseline(analysis: Path, phantom: Path) -> float | None:
@@ -111,9 +116,12 @@ def place(analysis: Path, truth: dict) -> Placement:
     d_mine = np.linalg.norm(mine[:, None] - mine[None], axis=2)[iu]
     d_true = np.linalg.norm(true[:, None] - true[None], axis=2)[iu]
     return Placement(
-        rotation, translation, len(cams), scale_error=float(np.median(d_mine / d_true) - 1.0),
+        rotation,
+        translation,
+        len(cams),
+        scale_error=float(np.median(d_mine / d_true) - 1.0),
         camera_rms_mm=float(np.sqrt(np.mean(np.sum((placed - true) ** 2, axis=1)))),
-    )  # fmt: skip
+    )
 
 
 def similarity_fit(source: np.ndarray, target: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:

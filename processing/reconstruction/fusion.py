@@ -50,8 +50,9 @@ def agreement(points: np.ndarray, others: list[DepthMap]) -> np.ndarray:
     return count
 
 
-def fuse(maps: list[DepthMap], colours: dict[str, np.ndarray], min_agree: int,
-         stride: int = 2) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # fmt: skip
+def fuse(
+    maps: list[DepthMap], colours: dict[str, np.ndarray], min_agree: int, stride: int = 2
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Points, normals and RGB colours (0-1) confirmed by at least `min_agree` other depth maps."""
     all_points, all_normals, all_colours = [], [], []
     for i, dm in enumerate(maps):

@@ -27,8 +27,9 @@ def linear_intensity(gray: np.ndarray) -> np.ndarray:
     return _LINEAR_LUT[gray]
 
 
-def refine_quad(linear: np.ndarray, quad: np.ndarray,
-                undistort: Callable[[np.ndarray], np.ndarray] | None = None) -> np.ndarray | None:  # fmt: skip
+def refine_quad(
+    linear: np.ndarray, quad: np.ndarray, undistort: Callable[[np.ndarray], np.ndarray] | None = None
+) -> np.ndarray | None:
     """Refined corners (4, 2) of a detected marker; None if an edge cannot be measured (e.g. cut off).
 
     `undistort` maps distorted pixel positions to the pinhole image, so edges are fitted as straight
@@ -69,8 +70,9 @@ def _edge_points(linear: np.ndarray, a: np.ndarray, b: np.ndarray, centre: np.nd
     samples = base[:, None, :] + offsets[None, :, None] * normal[None, None, :]
     h, w = linear.shape
     inside = (samples[..., 0] > 1) & (samples[..., 0] < w - 2) & (samples[..., 1] > 1) & (samples[..., 1] < h - 2)
-    profiles = cv2.remap(linear, samples[..., 0].astype(np.float32), samples[..., 1].astype(np.float32),
-                         cv2.INTER_LINEAR)  # fmt: skip
+    profiles = cv2.remap(
+        linear, samples[..., 0].astype(np.float32), samples[..., 1].astype(np.float32), cv2.INTER_LINEAR
+    )
     quarter = max(2, len(offsets) // 4)
     points = []
     for row, ok, origin in zip(profiles, inside.all(axis=1), base, strict=True):

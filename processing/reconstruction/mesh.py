@@ -45,19 +45,25 @@ def run(conf: ReconstructionConfig, dense_dir: Path, out_dir: Path) -> Path:
     mesh.remove_vertices_by_mask(drop)
     mesh = _largest_parts(mesh)
     if len(mesh.triangles) == 0:
-        raise CaptureInsufficient("no surface could be built around the burn; retake in even light",
-                                  code=FailureCode.no_surface)  # fmt: skip
+        raise CaptureInsufficient(
+            "no surface could be built around the burn; retake in even light", code=FailureCode.no_surface
+        )
     mesh.compute_vertex_normals()
     tmp = out_dir / (PLY + ".tmp.ply")
     o3d.io.write_triangle_mesh(str(tmp), mesh, write_ascii=False)
     tmp.replace(out_dir / PLY)
     write_glb(np.asarray(mesh.vertices), np.asarray(mesh.triangles), np.asarray(mesh.vertex_colors), out_dir / GLB)
     quality = DenseQuality(
-        method="cpu-plane-sweep", units=info.units, roi_centre=[round(c, 3) for c in info.roi_centres[0]],
-        roi_radius=round(info.roi_radii[0], 3), views_with_depth=info.views_with_depth,
-        fused_points=info.fused_points, mesh_vertices=len(mesh.vertices), mesh_faces=len(mesh.triangles),
+        method="cpu-plane-sweep",
+        units=info.units,
+        roi_centre=[round(c, 3) for c in info.roi_centres[0]],
+        roi_radius=round(info.roi_radii[0], 3),
+        views_with_depth=info.views_with_depth,
+        fused_points=info.fused_points,
+        mesh_vertices=len(mesh.vertices),
+        mesh_faces=len(mesh.triangles),
         mesh_area=round(float(mesh.get_surface_area()), 3),
-    )  # fmt: skip
+    )
     write_json(out_dir / QUALITY, quality)
     log.info("mesh: %d vertices, %d faces", len(mesh.vertices), len(mesh.triangles))
     return out_dir / PLY
@@ -77,9 +83,11 @@ def _largest_parts(mesh: o3d.geometry.TriangleMesh) -> o3d.geometry.TriangleMesh
 def write_glb(vertices: np.ndarray, faces: np.ndarray, colours: np.ndarray | None, path: Path) -> Path:
     """A glTF binary of the mesh with vertex colours (RGB in [0, 1], or None), written atomically."""
     tri = trimesh.Trimesh(
-        vertices=vertices, faces=faces, process=False,
+        vertices=vertices,
+        faces=faces,
+        process=False,
         vertex_colors=(np.clip(colours, 0, 1) * 255).astype(np.uint8) if colours is not None and len(colours) else None,
-    )  # fmt: skip
+    )
     tmp = path.with_name(path.name + ".tmp")
     tmp.write_bytes(trimesh.exchange.gltf.export_glb(trimesh.Scene(tri)))
     tmp.replace(path)

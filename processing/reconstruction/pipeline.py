@@ -71,13 +71,19 @@ def fingerprints(config: Config, source: Path, ruler: RulerPoints | None, gate: 
     listing = [(f.name, f.stat().st_size, f.stat().st_mtime_ns) for f in files if f.is_file()]
     chain: dict[str, str] = {}
     parts = {
-        "inputs": [code_digest(), str(source.resolve()), listing, msgspec.to_builtins(config.quality),
-                   msgspec.to_builtins(config.frames), gate],
+        "inputs": [
+            code_digest(),
+            str(source.resolve()),
+            listing,
+            msgspec.to_builtins(config.quality),
+            msgspec.to_builtins(config.frames),
+            gate,
+        ],
         "sfm": [msgspec.to_builtins(config.reconstruction)],
         "scale": [msgspec.to_builtins(ruler) if ruler else None],
         "dense": [],
         "mesh": [],
-    }  # fmt: skip
+    }
     previous = ""
     for name in STAGES:
         previous = hashlib.sha256(json.dumps([previous, parts[name]], sort_keys=True).encode()).hexdigest()
@@ -85,8 +91,15 @@ def fingerprints(config: Config, source: Path, ruler: RulerPoints | None, gate: 
     return chain
 
 
-def run(config: Config, source: Path, out: Path, ruler: RulerPoints | None = None, *, gate: bool = True,
-        progress: Callable[[str], None] | None = None) -> ReconstructionReport:  # fmt: skip
+def run(
+    config: Config,
+    source: Path,
+    out: Path,
+    ruler: RulerPoints | None = None,
+    *,
+    gate: bool = True,
+    progress: Callable[[str], None] | None = None,
+) -> ReconstructionReport:
     """Run (or resume) every stage; the report is also written to OUT/report.json.
 
     `progress(stage)` is called as each stage starts (or is found finished).
@@ -98,8 +111,12 @@ def run(config: Config, source: Path, out: Path, ruler: RulerPoints | None = Non
     (out / REPORT).unlink(missing_ok=True)
     if not source.exists():
         raise NotFound(f"{source} does not exist")
-    stages = Stages(out / FINGERPRINTS, {name: p[DONE[name]] for name in STAGES},
-                    fingerprints(config, source, ruler, gate), progress)  # fmt: skip
+    stages = Stages(
+        out / FINGERPRINTS,
+        {name: p[DONE[name]] for name in STAGES},
+        fingerprints(config, source, ruler, gate),
+        progress,
+    )
     stage, timings = stages.run, stages.timings
 
     pictures: list[str] = []
@@ -114,26 +131,43 @@ def run(config: Config, source: Path, out: Path, ruler: RulerPoints | None = Non
     except CaptureInsufficient as exc:
         return _failed(out, p, exc.detail, FailureCode(exc.code), pictures, timings)
     except Exception as exc:
-        _failed(out, p, f"the analysis stopped on an unexpected error ({exc}); the pictures are kept, "
-                        "please report this to your IT contact", FailureCode.internal_error, pictures, timings)  # fmt: skip
+        _failed(
+            out,
+            p,
+            f"the analysis stopped on an unexpected error ({exc}); the pictures are kept, "
+            "please report this to your IT contact",
+            FailureCode.internal_error,
+            pictures,
+            timings,
+        )
         raise
     report = ReconstructionReport(
-        outcome=Outcome.complete, pictures=pictures, sfm=read_json(p["sfm_quality"], SfmQuality),
-        scale=_scale(p["scale"]), dense=read_json(p["mesh_quality"], DenseQuality),
-        artifacts={k: str(v.relative_to(out)) for k, v in p.items() if v.exists()}, timings=timings,
+        outcome=Outcome.complete,
+        pictures=pictures,
+        sfm=read_json(p["sfm_quality"], SfmQuality),
+        scale=_scale(p["scale"]),
+        dense=read_json(p["mesh_quality"], DenseQuality),
+        artifacts={k: str(v.relative_to(out)) for k, v in p.items() if v.exists()},
+        timings=timings,
         software=software_versions(),
-    )  # fmt: skip
+    )
     write_json(out / REPORT, report)
     return report
 
 
-def _failed(out: Path, p: dict[str, Path], reason: str, code: FailureCode, pictures: list[str],
-            timings: list[StageTiming]) -> ReconstructionReport:  # fmt: skip
+def _failed(
+    out: Path, p: dict[str, Path], reason: str, code: FailureCode, pictures: list[str], timings: list[StageTiming]
+) -> ReconstructionReport:
     report = ReconstructionReport(
-        outcome=Outcome.failed, reason=reason, failure=code, pictures=pictures,
-        sfm=_maybe(p["sfm_quality"], SfmQuality), scale=_scale(p["scale"]), timings=timings,
+        outcome=Outcome.failed,
+        reason=reason,
+        failure=code,
+        pictures=pictures,
+        sfm=_maybe(p["sfm_quality"], SfmQuality),
+        scale=_scale(p["scale"]),
+        timings=timings,
         software=software_versions(),
-    )  # fmt: skip
+    )
     write_json(out / REPORT, report)
     return report
 

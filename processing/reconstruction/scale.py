@@ -28,8 +28,9 @@ RULER_MAX_PX = 5.0
 """A ruler click further than this from where the other clicks put the point is a different spot."""
 
 
-def run(conf: ReconstructionConfig, model_dir: Path, images_dir: Path, out_dir: Path,
-        ruler: RulerPoints | None = None) -> Path:  # fmt: skip
+def run(
+    conf: ReconstructionConfig, model_dir: Path, images_dir: Path, out_dir: Path, ruler: RulerPoints | None = None
+) -> Path:
     """Write out_dir/scale.json: the scale with its evidence and the model -> output transform."""
     views = load_views(read_model(model_dir))
     corners, detected = marker_corners(conf, views, images_dir)
@@ -40,8 +41,9 @@ def run(conf: ReconstructionConfig, model_dir: Path, images_dir: Path, out_dir: 
     return write_json(out_dir / RESULT, result)
 
 
-def marker_corners(conf: ReconstructionConfig, views: list[View],
-                   images_dir: Path) -> tuple[dict[int, list[list[tuple[View, np.ndarray]]]], int]:  # fmt: skip
+def marker_corners(
+    conf: ReconstructionConfig, views: list[View], images_dir: Path
+) -> tuple[dict[int, list[list[tuple[View, np.ndarray]]]], int]:
     """Per marker id, per corner (ArUco order): the (view, undistorted pixel) sightings whose edges
     could be measured; and in how many pictures a marker was detected at all."""
     found: dict[int, list[list[tuple[View, np.ndarray]]]] = {}
@@ -61,8 +63,12 @@ def marker_corners(conf: ReconstructionConfig, views: list[View],
     return found, detected
 
 
-def from_marker(conf: ReconstructionConfig, found: dict[int, list[list[tuple[View, np.ndarray]]]],
-                views: list[View], detected: int = 0) -> ScaleResult:  # fmt: skip
+def from_marker(
+    conf: ReconstructionConfig,
+    found: dict[int, list[list[tuple[View, np.ndarray]]]],
+    views: list[View],
+    detected: int = 0,
+) -> ScaleResult:
     corners: dict[int, np.ndarray] = {}
     residuals: list[float] = []
     for marker_id, slots in found.items():
@@ -79,8 +85,10 @@ def from_marker(conf: ReconstructionConfig, found: dict[int, list[list[tuple[Vie
         if found:
             note = f"the marker was measurable in too few placed pictures (needs {conf.marker_min_views})"
         elif detected:
-            note = (f"the marker was seen in {detected} pictures but its edges could not be measured "
-                    "(glare, cut off by the picture's edge, or too small)")  # fmt: skip
+            note = (
+                f"the marker was seen in {detected} pictures but its edges could not be measured "
+                "(glare, cut off by the picture's edge, or too small)"
+            )
         else:
             note = "no scale marker was found"
         note += "; sizes are in model units only"
@@ -103,20 +111,27 @@ def from_marker(conf: ReconstructionConfig, found: dict[int, list[list[tuple[Vie
     # the marker scale was off by up to 0.2 %.
     between = float(np.std(per_marker, ddof=1)) / math.sqrt(len(per_marker)) / scale if len(per_marker) > 1 else 0.0
     estimate = ScaleEstimate(
-        ScaleSource.marker, mm_per_unit=scale, relative_uncertainty=round(max(SCALE_FLOOR, between), 5),
-        relative_spread=round(spread, 5), edges_used=int(keep.sum()), edges_rejected=rejected,
-        marker_ids=sorted(corners), views_with_marker=seen_in,
+        ScaleSource.marker,
+        mm_per_unit=scale,
+        relative_uncertainty=round(max(SCALE_FLOOR, between), 5),
+        relative_spread=round(spread, 5),
+        edges_used=int(keep.sum()),
+        edges_rejected=rejected,
+        marker_ids=sorted(corners),
+        views_with_marker=seen_in,
         mean_corner_reprojection_px=round(float(np.mean(residuals)), 3),
         note=f"{len(corners)} marker(s), {int(keep.sum())} edges and diagonals",
-    )  # fmt: skip
+    )
     model_corners = {str(k): v.tolist() for k, v in corners.items()}
     if spread > conf.max_scale_spread or rejected > len(values) // 3:
         untrusted = ScaleEstimate(
-            ScaleSource.none, views_with_marker=seen_in, relative_spread=round(spread, 5),
+            ScaleSource.none,
+            views_with_marker=seen_in,
+            relative_spread=round(spread, 5),
             note=f"the marker's edges disagree ({100 * spread:.1f} % spread, {rejected} of {len(values)} edges off; "
-                 "bent, creased or partly hidden marker?); "
-                 "the scale is not trusted and sizes stay in model units",
-        )  # fmt: skip
+            "bent, creased or partly hidden marker?); "
+            "the scale is not trusted and sizes stay in model units",
+        )
         return ScaleResult(untrusted, _identity(), model_corners)
     return ScaleResult(estimate, _marker_frame(np.vstack(list(corners.values())), scale, views), model_corners)
 
@@ -153,12 +168,15 @@ def from_ruler(ruler: RulerPoints, views: list[View], why_not_marker: str) -> Sc
     if not checked:
         relative *= 3  # two pictures always agree on some point: a mis-click cannot be seen, so widen
     estimate = ScaleEstimate(
-        ScaleSource.ruler, mm_per_unit=scale, relative_uncertainty=round(max(SCALE_FLOOR, relative), 5),
-        views_with_marker=0, mean_corner_reprojection_px=round(float(np.mean(errors)), 3),
+        ScaleSource.ruler,
+        mm_per_unit=scale,
+        relative_uncertainty=round(max(SCALE_FLOOR, relative), 5),
+        views_with_marker=0,
+        mean_corner_reprojection_px=round(float(np.mean(errors)), 3),
         note=f"ruler points marked in {len(marks)} pictures"
-             + ("" if checked else " (two pictures cannot cross-check a click; mark a third to confirm)")
-             + f" ({why_not_marker})",
-    )  # fmt: skip
+        + ("" if checked else " (two pictures cannot cross-check a click; mark a third to confirm)")
+        + f" ({why_not_marker})",
+    )
     transform = np.eye(4)
     transform[:3, :3] *= scale
     return ScaleResult(estimate, transform.tolist())

@@ -20,8 +20,13 @@ log = logging.getLogger(__name__)
 
 QUALITY = "sfm_quality.json"
 MODEL = "model"
-THOROUGH = {"sift_first_octave": -1, "sift_max_features": 16384, "guided_matching": True,
-            "min_pose_inliers": 15, "min_pose_inlier_ratio": 0.1}  # fmt: skip
+THOROUGH = {
+    "sift_first_octave": -1,
+    "sift_max_features": 16384,
+    "guided_matching": True,
+    "min_pose_inliers": 15,
+    "min_pose_inlier_ratio": 0.1,
+}
 """Settings of the second attempt, for weakly textured sets or pictures taken far apart: on the real
 skull photos they place 33 of 33 where the fast defaults place 14 (at about 20 times the cost)."""
 
@@ -44,8 +49,9 @@ def run(conf: ReconstructionConfig, images_dir: Path, names: list[str], out_dir:
         if exc.code != FailureCode.too_few_placed or not conf.thorough_retry:
             raise
         log.info("SfM placed too few pictures (%s); trying once more with thorough settings", exc.detail)
-        model, quality, database = _attempt(msgspec.structs.replace(conf, **THOROUGH), images_dir, names, out_dir,
-                                            video=video, thorough=True)  # fmt: skip
+        model, quality, database = _attempt(
+            msgspec.structs.replace(conf, **THOROUGH), images_dir, names, out_dir, video=video, thorough=True
+        )
     tmp = fresh_dir(out_dir / (MODEL + ".tmp"))
     model.write_binary(str(tmp))
     publish_dir(tmp, out_dir / MODEL)
@@ -56,8 +62,9 @@ def run(conf: ReconstructionConfig, images_dir: Path, names: list[str], out_dir:
     return out_dir / MODEL
 
 
-def _attempt(conf: ReconstructionConfig, images_dir: Path, names: list[str], out_dir: Path, *, video: bool,
-             thorough: bool) -> tuple[pycolmap.Reconstruction, SfmQuality, Path]:  # fmt: skip
+def _attempt(
+    conf: ReconstructionConfig, images_dir: Path, names: list[str], out_dir: Path, *, video: bool, thorough: bool
+) -> tuple[pycolmap.Reconstruction, SfmQuality, Path]:
     work = fresh_dir(out_dir / "work")
     database = work / "database.db"
     extract(conf, images_dir, names, database)
@@ -78,13 +85,19 @@ def extract(conf: ReconstructionConfig, images_dir: Path, names: list[str], data
     reader = pycolmap.ImageReaderOptions()
     reader.camera_model = conf.camera_model
     pycolmap.extract_features(
-        database, images_dir, image_names=names, camera_mode=pycolmap.CameraMode.SINGLE,
-        reader_options=reader, extraction_options=options, device=pycolmap.Device.cpu,
-    )  # fmt: skip
+        database,
+        images_dir,
+        image_names=names,
+        camera_mode=pycolmap.CameraMode.SINGLE,
+        reader_options=reader,
+        extraction_options=options,
+        device=pycolmap.Device.cpu,
+    )
 
 
-def match(conf: ReconstructionConfig, names: list[str], images_dir: Path, database: Path, work: Path, *,
-           video: bool) -> str:  # fmt: skip
+def match(
+    conf: ReconstructionConfig, names: list[str], images_dir: Path, database: Path, work: Path, *, video: bool
+) -> str:
     options = pycolmap.FeatureMatchingOptions()
     options.guided_matching = conf.guided_matching
     if not video:
@@ -97,10 +110,11 @@ def match(conf: ReconstructionConfig, names: list[str], images_dir: Path, databa
     pairs_file = work / "pairs.txt"
     pairs_file.write_text("".join(f"{a} {b}\n" for a, b in pairs))
     pycolmap.match_image_pairs(
-        database, matching_options=options,
+        database,
+        matching_options=options,
         pairing_options=pycolmap.ImportedPairingOptions(match_list_path=str(pairs_file)),
         device=pycolmap.Device.cpu,
-    )  # fmt: skip
+    )
     return "sequential+loop"
 
 
@@ -129,8 +143,9 @@ def _thumbnail(path: Path) -> np.ndarray:
     return small / (np.linalg.norm(small) + 1e-9)
 
 
-def incremental_map(conf: ReconstructionConfig, images_dir: Path, names: list[str], database: Path,
-         out: Path) -> list[pycolmap.Reconstruction]:  # fmt: skip
+def incremental_map(
+    conf: ReconstructionConfig, images_dir: Path, names: list[str], database: Path, out: Path
+) -> list[pycolmap.Reconstruction]:
     fresh_dir(out)
     options = pycolmap.IncrementalPipelineOptions()
     options.min_model_size = 3

@@ -19,11 +19,15 @@ MIN_TRI_ANGLE_DEG = 2.0
 MIN_BASELINE_RATIO = 0.05
 """Widest distance between two camera positions over the median distance to the scene: below this the
 pictures were taken from one spot (a bogus model of a pure rotation can still show wide angles)."""
-_ROTATION_ONLY = {int(pycolmap.TwoViewGeometryConfiguration.PANORAMIC),
-                  int(pycolmap.TwoViewGeometryConfiguration.PLANAR_OR_PANORAMIC)}  # fmt: skip
-_UNUSABLE = {int(pycolmap.TwoViewGeometryConfiguration.UNDEFINED),
-             int(pycolmap.TwoViewGeometryConfiguration.DEGENERATE),
-             int(pycolmap.TwoViewGeometryConfiguration.WATERMARK)}  # fmt: skip
+_ROTATION_ONLY = {
+    int(pycolmap.TwoViewGeometryConfiguration.PANORAMIC),
+    int(pycolmap.TwoViewGeometryConfiguration.PLANAR_OR_PANORAMIC),
+}
+_UNUSABLE = {
+    int(pycolmap.TwoViewGeometryConfiguration.UNDEFINED),
+    int(pycolmap.TwoViewGeometryConfiguration.DEGENERATE),
+    int(pycolmap.TwoViewGeometryConfiguration.WATERMARK),
+}
 
 
 @dataclass
@@ -77,8 +81,9 @@ def _pair(pair_id: int) -> tuple[int, int]:
     return (pair_id - second) // 2147483647, second
 
 
-def check_model(conf: ReconstructionConfig, models: list[pycolmap.Reconstruction], names: list[str],
-                graph: PairGraph) -> tuple[pycolmap.Reconstruction, float]:  # fmt: skip
+def check_model(
+    conf: ReconstructionConfig, models: list[pycolmap.Reconstruction], names: list[str], graph: PairGraph
+) -> tuple[pycolmap.Reconstruction, float]:
     """The largest model and its median triangulation angle, or CaptureInsufficient saying why the
     pictures cannot be measured."""
     needed = max(3, math.ceil(conf.min_registered_fraction * len(names)))
@@ -149,8 +154,14 @@ def median_triangulation_angle(model: pycolmap.Reconstruction, sample: int = 300
     return float(np.median(angles))
 
 
-def quality_record(model: pycolmap.Reconstruction, models: list[pycolmap.Reconstruction], names: list[str],
-                   graph: PairGraph, matching: str, angle: float) -> SfmQuality:  # fmt: skip
+def quality_record(
+    model: pycolmap.Reconstruction,
+    models: list[pycolmap.Reconstruction],
+    names: list[str],
+    graph: PairGraph,
+    matching: str,
+    angle: float,
+) -> SfmQuality:
     errors = np.array([p.error for p in model.points3D.values()]) if model.num_points3D() else np.zeros(1)
     registered = {model.images[i].name for i in model.reg_image_ids()}
     matched = {p: n for p, n in graph.matches.items() if n > 0}

@@ -61,8 +61,9 @@ class DepthMap:
     valid: np.ndarray
 
 
-def depth_map(ref: Picture, sources: list[Picture], region: Region, planes: int, min_ncc: float,
-              finest: int = 1) -> DepthMap | None:  # fmt: skip
+def depth_map(
+    ref: Picture, sources: list[Picture], region: Region, planes: int, min_ncc: float, finest: int = 1
+) -> DepthMap | None:
     box = region.pixel_box(ref.view)
     if box is None:
         return None
@@ -111,8 +112,9 @@ def _aggregate(scores: np.ndarray) -> np.ndarray:
     return np.sort(scores, axis=0)[-keep:].mean(axis=0)
 
 
-def _sweep(ref: Picture, sources: list[Picture], crop: tuple[int, int, int, int], near: float, far: float,
-           planes: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # fmt: skip
+def _sweep(
+    ref: Picture, sources: list[Picture], crop: tuple[int, int, int, int], near: float, far: float, planes: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     factor, window = 4, WINDOWS[4]
     x0, y0, x1, y1 = (c // factor for c in crop)
     image = ref.pyramid[factor][y0:y1, x0:x1]
@@ -133,8 +135,13 @@ def _sweep(ref: Picture, sources: list[Picture], crop: tuple[int, int, int, int]
         per_source = []
         for src, fixed, per_inverse_depth in parts:
             homography = fixed + per_inverse_depth * inv_depth
-            warped = cv2.warpPerspective(src.pyramid[factor], homography, image.shape[::-1],
-                                         flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP, borderValue=0.0)  # fmt: skip
+            warped = cv2.warpPerspective(
+                src.pyramid[factor],
+                homography,
+                image.shape[::-1],
+                flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
+                borderValue=0.0,
+            )
             per_source.append(_ncc(image, ref_mean, ref_var, warped, window))
         costs[i] = _aggregate(np.array(per_source))
     best = np.argmax(costs, axis=0)
@@ -159,8 +166,9 @@ def _parabola(costs: np.ndarray, best: np.ndarray) -> np.ndarray:
     return np.clip(offset, -0.5, 0.5)
 
 
-def _refine(ref: Picture, sources: list[Picture], factor: int, origin: tuple[int, int], prior: np.ndarray,
-            step: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # fmt: skip
+def _refine(
+    ref: Picture, sources: list[Picture], factor: int, origin: tuple[int, int], prior: np.ndarray, step: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     window = WINDOWS[factor]
     x0, y0 = origin[0] // factor, origin[1] // factor
     h, w = prior.shape
@@ -189,8 +197,14 @@ def _refine(ref: Picture, sources: list[Picture], factor: int, origin: tuple[int
             p = depth[..., None] * direction + offset
             with np.errstate(divide="ignore", invalid="ignore"):
                 mx, my = p[..., 0] / p[..., 2], p[..., 1] / p[..., 2]
-            warped = cv2.remap(src.pyramid[factor], mx.astype(np.float32), my.astype(np.float32), cv2.INTER_LINEAR,
-                               borderMode=cv2.BORDER_CONSTANT, borderValue=0.0)  # fmt: skip
+            warped = cv2.remap(
+                src.pyramid[factor],
+                mx.astype(np.float32),
+                my.astype(np.float32),
+                cv2.INTER_LINEAR,
+                borderMode=cv2.BORDER_CONSTANT,
+                borderValue=0.0,
+            )
             per_source.append(_ncc(image, ref_mean, ref_var, warped, window))
         costs[k] = _aggregate(np.array(per_source))
     best = np.argmax(costs, axis=0)

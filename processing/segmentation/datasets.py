@@ -71,12 +71,21 @@ def phantom_spec(index: int, conf: TrainingConfig) -> PhantomSpec:
     """The index-th training scene: tones and looks come round in turn, the body part is drawn at random."""
     rng = np.random.default_rng([conf.seed, index])
     return PhantomSpec(
-        shape=SHAPES[int(rng.integers(0, len(SHAPES)))], seed=int(rng.integers(1, 2**31)), views=conf.synthetic_views,
-        width=640, height=480, supersample=1.0, tone=TONES[index % len(TONES)],
-        burn_look=LOOKS[(index // len(TONES)) % len(LOOKS)], area_cm2=float(rng.uniform(3.0, 30.0)),
-        depth_mm=float(rng.choice([0.0, rng.uniform(0.5, 4.0)])), healing=float(rng.choice([0.0, rng.uniform(0.0, 0.6)])),
-        distance_min_mm=150.0, distance_max_mm=300.0, jpeg_quality=int(rng.integers(70, 95)),
-    )  # fmt: skip
+        shape=SHAPES[int(rng.integers(0, len(SHAPES)))],
+        seed=int(rng.integers(1, 2**31)),
+        views=conf.synthetic_views,
+        width=640,
+        height=480,
+        supersample=1.0,
+        tone=TONES[index % len(TONES)],
+        burn_look=LOOKS[(index // len(TONES)) % len(LOOKS)],
+        area_cm2=float(rng.uniform(3.0, 30.0)),
+        depth_mm=float(rng.choice([0.0, rng.uniform(0.5, 4.0)])),
+        healing=float(rng.choice([0.0, rng.uniform(0.0, 0.6)])),
+        distance_min_mm=150.0,
+        distance_max_mm=300.0,
+        jpeg_quality=int(rng.integers(70, 95)),
+    )
 
 
 def render_scenes(conf: TrainingConfig, cache: Path) -> list[tuple[Path, PhantomSpec]]:
@@ -87,8 +96,14 @@ def render_scenes(conf: TrainingConfig, cache: Path) -> list[tuple[Path, Phantom
         digest = hashlib.sha256(msgspec.json.encode(spec)).hexdigest()[:10]
         folder = cache / f"scene_{index:03d}_{digest}"
         if not (folder / "ground_truth.json").exists():
-            log.info("rendering phantom %d/%d (%s, tone %s, %s)", index + 1, conf.synthetic_scenes, spec.shape,
-                     spec.tone, spec.burn_look)  # fmt: skip
+            log.info(
+                "rendering phantom %d/%d (%s, tone %s, %s)",
+                index + 1,
+                conf.synthetic_scenes,
+                spec.shape,
+                spec.tone,
+                spec.burn_look,
+            )
             render_phantom(spec, folder)
         scenes.append((folder, spec))
     return scenes
@@ -109,8 +124,10 @@ def burn_crops(rgb: np.ndarray, mask: np.ndarray, rng: np.random.Generator, coun
         x0 = int(np.clip(cx - side / 2, 0, w - side))
         crop = rgb[y0 : y0 + side, x0 : x0 + side]
         crop_mask = mask[y0 : y0 + side, x0 : x0 + side]
-        yield (cv2.resize(crop, (size, size), interpolation=cv2.INTER_AREA),
-               cv2.resize(crop_mask, (size, size), interpolation=cv2.INTER_NEAREST))  # fmt: skip
+        yield (
+            cv2.resize(crop, (size, size), interpolation=cv2.INTER_AREA),
+            cv2.resize(crop_mask, (size, size), interpolation=cv2.INTER_NEAREST),
+        )
 
 
 def synthetic_samples(scenes: list[tuple[Path, PhantomSpec]], conf: TrainingConfig, crops_per_view: int = 3):

@@ -25,7 +25,9 @@ def split_scores(pairs: list[tuple[np.ndarray, np.ndarray]]) -> SplitScores:
     total = sum(float(p.sum() + t.sum()) for p, t in pairs)
     per = np.array([dice_iou(p, t) for p, t in pairs])
     return SplitScores(
-        images=len(pairs), dice_pooled=round(2 * inter / total, 4) if total else 1.0,
+        images=len(pairs),
+        dice_pooled=round(2 * inter / total, 4) if total else 1.0,
         iou_pooled=round(inter / (total - inter), 4) if total else 1.0,
-        dice_mean=round(float(per[:, 0].mean()), 4), iou_mean=round(float(per[:, 1].mean()), 4),
-    )  # fmt: skip
+        dice_mean=round(float(per[:, 0].mean()), 4),
+        iou_mean=round(float(per[:, 1].mean()), 4),
+    )

@@ -93,13 +93,24 @@ def export(net: BurnUNet, conf: TrainingConfig, path: Path) -> None:
     net.eval()
     dummy = torch.rand(1, 3, conf.input_size, conf.input_size)
     tmp = path.with_name(path.name + ".tmp")
-    torch.onnx.export(Probability(net), dummy, str(tmp), input_names=["image"], output_names=["probability"],
-                      dynamic_axes={"image": {0: "n"}, "probability": {0: "n"}}, opset_version=17,
-                      dynamo=False)  # fmt: skip
+    torch.onnx.export(
+        Probability(net),
+        dummy,
+        str(tmp),
+        input_names=["image"],
+        output_names=["probability"],
+        dynamic_axes={"image": {0: "n"}, "probability": {0: "n"}},
+        opset_version=17,
+        dynamo=False,
+    )
     model = onnx.load(str(tmp))
-    meta = {"input_size": str(conf.input_size), "input": "RGB float32 in [0, 1], NCHW",
-            "output": "burn probability per pixel", "license": "CC BY-NC 4.0 (trained on FUSeg 2021 photos)",
-            "card": "docs/segmentation-model.md"}  # fmt: skip
+    meta = {
+        "input_size": str(conf.input_size),
+        "input": "RGB float32 in [0, 1], NCHW",
+        "output": "burn probability per pixel",
+        "license": "CC BY-NC 4.0 (trained on FUSeg 2021 photos)",
+        "card": "docs/segmentation-model.md",
+    }
     for key, value in meta.items():
         model.metadata_props.add(key=key, value=value)
     onnx.save(model, str(tmp))
@@ -113,21 +124,35 @@ def run(conf: TrainingConfig, real_root: Path, out_dir: Path, cache_dir: Path) -
     out_dir.mkdir(parents=True, exist_ok=True)
     real_train, real_val = datasets.real_samples(real_root, conf.validation_percent)
     syn_train, syn_val = datasets.synthetic_samples(datasets.render_scenes(conf, cache_dir), conf)
-    log.info("real %d train / %d held out; synthetic %d train / %d held out",
-             len(real_train), len(real_val), len(syn_train), len(syn_val))  # fmt: skip
+    log.info(
+        "real %d train / %d held out; synthetic %d train / %d held out",
+        len(real_train),
+        len(real_val),
+        len(syn_train),
+        len(syn_val),
+    )
     net = BurnUNet(tuple(conf.widths))
     per_epoch = (len(real_train) + min(conf.synthetic_per_epoch, len(syn_train))) // conf.batch_size
     if per_epoch == 0:
-        raise InvalidInput(f"too little training data: {len(real_train)} photos and {len(syn_train)} phantom crops "
-                           f"make no batch of {conf.batch_size}")  # fmt: skip
+        raise InvalidInput(
+            f"too little training data: {len(real_train)} photos and {len(syn_train)} phantom crops "
+            f"make no batch of {conf.batch_size}"
+        )
     opt = torch.optim.AdamW(net.parameters(), lr=conf.learning_rate, weight_decay=conf.weight_decay)
-    sched = torch.optim.lr_scheduler.OneCycleLR(opt, conf.learning_rate, total_steps=per_epoch * conf.epochs,
-                                                pct_start=0.1)  # fmt: skip
+    sched = torch.optim.lr_scheduler.OneCycleLR(
+        opt, conf.learning_rate, total_steps=per_epoch * conf.epochs, pct_start=0.1
+    )
     history, started = [], time.monotonic()
     for epoch in range(conf.epochs):
         net.train()
-        extra = [syn_train[i] for i in rng.choice(len(syn_train), min(conf.synthetic_per_epoch, len(syn_train)),
-                                                  replace=False)] if syn_train else []  # fmt: skip
+        extra = (
+            [
+                syn_train[i]
+                for i in rng.choice(len(syn_train), min(conf.synthetic_per_epoch, len(syn_train)), replace=False)
+            ]
+            if syn_train
+            else []
+        )
         losses = []
         for step, (x, y) in enumerate(batches(real_train + extra, conf, rng)):
             if step >= per_epoch:
@@ -144,16 +169,24 @@ def run(conf: TrainingConfig, real_root: Path, out_dir: Path, cache_dir: Path) -
     train_seconds = time.monotonic() - started
     model_path = out_dir / MODEL
     export(net, conf, model_path)
-    by_tone = {tone.value: evaluate(net, [s for s in syn_val if s.group == tone.value], conf.input_size)
-               for tone in datasets.TONES}  # fmt: skip
+    by_tone = {
+        tone.value: evaluate(net, [s for s in syn_val if s.group == tone.value], conf.input_size)
+        for tone in datasets.TONES
+    }
     report = TrainingReport(
-        config=conf, model_file=MODEL, model_sha256=hashlib.sha256(model_path.read_bytes()).hexdigest(),
-        parameters=sum(p.numel() for p in net.parameters()), epochs_run=conf.epochs,
-        train_seconds=round(train_seconds, 1), machine=f"{platform.processor() or platform.machine()}, "
-        f"{conf.threads} of {os.cpu_count()} threads", real_train_images=len(real_train),
-        real_validation=evaluate(net, real_val, conf.input_size), synthetic_train_crops=len(syn_train),
-        synthetic_validation=evaluate(net, syn_val, conf.input_size), synthetic_by_tone=by_tone,
+        config=conf,
+        model_file=MODEL,
+        model_sha256=hashlib.sha256(model_path.read_bytes()).hexdigest(),
+        parameters=sum(p.numel() for p in net.parameters()),
+        epochs_run=conf.epochs,
+        train_seconds=round(train_seconds, 1),
+        machine=f"{platform.processor() or platform.machine()}, {conf.threads} of {os.cpu_count()} threads",
+        real_train_images=len(real_train),
+        real_validation=evaluate(net, real_val, conf.input_size),
+        synthetic_train_crops=len(syn_train),
+        synthetic_validation=evaluate(net, syn_val, conf.input_size),
+        synthetic_by_tone=by_tone,
         loss_history=[round(v, 5) for v in history],
-    )  # fmt: skip
+    )
     write_json(out_dir / REPORT, msgspec.to_builtins(report))
     return out_dir / REPORT

@@ -39,8 +39,9 @@ class AnchorBook:
         except (msgspec.DecodeError, msgspec.ValidationError) as exc:
             raise TransferRejected(f"the anchor request is not a valid message ({exc})", code="garbage") from exc
         if request.site_id != site_id or request.center_id != self.keys.site_id:
-            raise TransferRejected(f"anchor request addressed to {request.center_id} from {request.site_id}",
-                                   code="misaddressed")  # fmt: skip
+            raise TransferRejected(
+                f"anchor request addressed to {request.center_id} from {request.site_id}", code="misaddressed"
+            )
         with self.db.write() as conn:
             last = self.latest(conn, site_id)
             if last is not None:
@@ -49,17 +50,23 @@ class AnchorBook:
                     return AnchorReply(status="need", need_seq=seq)
                 _check_runs_through(site_id, request.head, request.previous, seq, digest, when)
             if last is None or request.head.seq > last[0]:
-                conn.execute("INSERT INTO audit_anchors (site_id, seq, hash, anchored_at) VALUES (?,?,?,?)",
-                             (site_id, request.head.seq, request.head.hash, iso(utcnow())))  # fmt: skip
+                conn.execute(
+                    "INSERT INTO audit_anchors (site_id, seq, hash, anchored_at) VALUES (?,?,?,?)",
+                    (site_id, request.head.seq, request.head.hash, iso(utcnow())),
+                )
             seq, digest, when = self.latest(conn, site_id)
-        anchor = AuditAnchor(site_id=site_id, center_id=self.keys.site_id, head=AuditHead(seq=seq, hash=digest),
-                             anchored_at=when)  # fmt: skip
+        anchor = AuditAnchor(
+            site_id=site_id, center_id=self.keys.site_id, head=AuditHead(seq=seq, hash=digest), anchored_at=when
+        )
         return AnchorReply(status="anchored", anchor=self.keys.sign("audit-anchor", anchor))
 
     @staticmethod
     def latest(conn, site_id: str) -> tuple[int, str, str] | None:
-        row = conn.execute("SELECT seq, hash, anchored_at FROM audit_anchors WHERE site_id = ? AND voided_at IS NULL"
-                           " ORDER BY seq DESC, id DESC LIMIT 1", (site_id,)).fetchone()  # fmt: skip
+        row = conn.execute(
+            "SELECT seq, hash, anchored_at FROM audit_anchors WHERE site_id = ? AND voided_at IS NULL"
+            " ORDER BY seq DESC, id DESC LIMIT 1",
+            (site_id,),
+        ).fetchone()
         return (row["seq"], row["hash"], row["anchored_at"]) if row else None
 
 
@@ -69,12 +76,24 @@ def accept_restore(db: Database, site_id: str, *, by: str, reason: str) -> dict:
     with db.write() as conn:
         peers.trusted(conn, site_id, SiteRole.clinic)
         last = AnchorBook.latest(conn, site_id)
-        voided = conn.execute("UPDATE audit_anchors SET voided_at = ? WHERE site_id = ? AND voided_at IS NULL",
-                              (iso(utcnow()), site_id)).rowcount  # fmt: skip
-        audit.append(conn, action="peer.accept_restore", user_id=None, device_id=None, kind="peer", record_id=site_id,
-                     detail=f"by {by}: {reason}; {voided} anchors voided, last at entry {last[0] if last else '-'}")  # fmt: skip
-    return {"site_id": site_id, "anchors_voided": voided, "last_anchored_seq": last[0] if last else None,
-            "next": "the site's next sync round anchors its restored audit chain"}  # fmt: skip
+        voided = conn.execute(
+            "UPDATE audit_anchors SET voided_at = ? WHERE site_id = ? AND voided_at IS NULL", (iso(utcnow()), site_id)
+        ).rowcount
+        audit.append(
+            conn,
+            action="peer.accept_restore",
+            user_id=None,
+            device_id=None,
+            kind="peer",
+            record_id=site_id,
+            detail=f"by {by}: {reason}; {voided} anchors voided, last at entry {last[0] if last else '-'}",
+        )
+    return {
+        "site_id": site_id,
+        "anchors_voided": voided,
+        "last_anchored_seq": last[0] if last else None,
+        "next": "the site's next sync round anchors its restored audit chain",
+    }
 
 
 def _check_runs_through(site_id: str, head: AuditHead, previous: AuditHead, seq: int, digest: str, when: str) -> None:

@@ -44,8 +44,10 @@ log = logging.getLogger("burnedge.central")
 def center_paths(central: CentralConfig) -> tuple[Path, Path]:
     """The store and keys folders: as configured, or beside the database."""
     base = Path(central.database).resolve().parent
-    return (Path(central.store_dir) if central.store_dir else base / "burnedge-central-store",
-            Path(central.keys_dir) if central.keys_dir else base / "burnedge-central-keys")  # fmt: skip
+    return (
+        Path(central.store_dir) if central.store_dir else base / "burnedge-central-store",
+        Path(central.keys_dir) if central.keys_dir else base / "burnedge-central-keys",
+    )
 
 
 def open_center_db(central: CentralConfig) -> Database:
@@ -69,9 +71,14 @@ class CentralServices:
     def build(cls, config: Config, db: Database) -> CentralServices:
         store_dir, keys_dir = center_paths(config.central)
         keys = load_keys(keys_dir)
-        return cls(config=config, db=db, keys=keys, accounts=AccountService(db, config.security),
-                   cases=CaseService(db, keys, PartStore(store_dir / "parts")),
-                   receiver=Receiver(db, config.central, keys, store_dir))  # fmt: skip
+        return cls(
+            config=config,
+            db=db,
+            keys=keys,
+            accounts=AccountService(db, config.security),
+            cases=CaseService(db, keys, PartStore(store_dir / "parts")),
+            receiver=Receiver(db, config.central, keys, store_dir),
+        )
 
 
 CentralDep = Annotated["CentralServices", Dependency(skip_validation=True)]
@@ -82,25 +89,39 @@ class CaseController(Controller):
     tags = ["cases"]
 
     @get("/", sync_to_thread=False, summary="Incoming cases: awaiting advice first, then by urgency, oldest first")
-    def list_cases(self, request: AuthedRequest, services: CentralDep,
-                   include_superseded: Annotated[bool, QueryParameter()] = False) -> list[CaseItem]:  # fmt: skip
+    def list_cases(
+        self,
+        request: AuthedRequest,
+        services: CentralDep,
+        include_superseded: Annotated[bool, QueryParameter()] = False,
+    ) -> list[CaseItem]:
         return services.cases.list_cases(request.user, include_superseded=include_superseded)
 
     @get("/{site_id:str}/{bundle_id:str}", sync_to_thread=False, summary="A case: summary, parts, versions, notes")
-    def case(self, site_id: SiteIdPath, bundle_id: IdPath, request: AuthedRequest,
-             services: CentralDep) -> CaseDetail:  # fmt: skip
+    def case(self, site_id: SiteIdPath, bundle_id: IdPath, request: AuthedRequest, services: CentralDep) -> CaseDetail:
         return services.cases.case(request.user, site_id, bundle_id)
 
     @get("/{site_id:str}/{bundle_id:str}/parts/{name:path}", sync_to_thread=True, summary="One file of a case")
-    def part(self, site_id: SiteIdPath, bundle_id: IdPath, name: FromPath[str], request: AuthedRequest,
-             services: CentralDep) -> Response[bytes]:  # fmt: skip
+    def part(
+        self, site_id: SiteIdPath, bundle_id: IdPath, name: FromPath[str], request: AuthedRequest, services: CentralDep
+    ) -> Response[bytes]:
         data, media_type = services.cases.part(request.user, site_id, bundle_id, name.lstrip("/"))
         return Response(content=data, media_type=media_type)
 
-    @post("/{site_id:str}/{bundle_id:str}/notes", sync_to_thread=True, status_code=201,
-          summary="Write advice on a case; it travels to the clinic encrypted and signed")  # fmt: skip
-    def write_note(self, site_id: SiteIdPath, bundle_id: IdPath, data: JSONBody[NoteRequest],
-                   request: AuthedRequest, services: CentralDep) -> NoteStatus:  # fmt: skip
+    @post(
+        "/{site_id:str}/{bundle_id:str}/notes",
+        sync_to_thread=True,
+        status_code=201,
+        summary="Write advice on a case; it travels to the clinic encrypted and signed",
+    )
+    def write_note(
+        self,
+        site_id: SiteIdPath,
+        bundle_id: IdPath,
+        data: JSONBody[NoteRequest],
+        request: AuthedRequest,
+        services: CentralDep,
+    ) -> NoteStatus:
         return services.cases.write_note(request.user, site_id, bundle_id, data)
 
 
@@ -131,7 +152,7 @@ def create_central_app(config: Config, services: CentralServices) -> Litestar:
             path="/schema",
             description="Cases received from clinics and consultants' advice back. "
             "Decision support, never autonomous decisions.",
-        ),  # fmt: skip
+        ),
         state=State({"services": services}),
     )
 
@@ -142,13 +163,27 @@ def serve_central(config: Config) -> None:
     try:
         services = CentralServices.build(config, db)
         scheduler = BackgroundScheduler(daemon=True)
-        scheduler.add_job(services.receiver.drop_stale, "interval", hours=6, args=[config.central.stale_transfer_days],
-                          id="drop-stale-transfers", coalesce=True, max_instances=1, next_run_time=utcnow())  # fmt: skip
+        scheduler.add_job(
+            services.receiver.drop_stale,
+            "interval",
+            hours=6,
+            args=[config.central.stale_transfer_days],
+            id="drop-stale-transfers",
+            coalesce=True,
+            max_instances=1,
+            next_run_time=utcnow(),
+        )
         scheduler.start()
         with Endpoint(db, config.central, services.receiver):
             log.info("consultants' API on http://%s:%d", config.central.host, config.central.port)
-            uvicorn.run(create_central_app(config, services), host=config.central.host, port=config.central.port,
-                        log_level="warning", access_log=False, timeout_graceful_shutdown=5)  # fmt: skip
+            uvicorn.run(
+                create_central_app(config, services),
+                host=config.central.host,
+                port=config.central.port,
+                log_level="warning",
+                access_log=False,
+                timeout_graceful_shutdown=5,
+            )
         scheduler.shutdown(wait=True)
     finally:
         db.close()

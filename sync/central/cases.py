@@ -53,14 +53,23 @@ class CaseService:
         row = conn.execute(_CASE_SQL + " WHERE b.site_id = ? AND b.bundle_id = ?", (site_id, bundle_id)).fetchone()
         if row is None:
             raise NotFound(f"no case {bundle_id} from {site_id}")
-        versions = conn.execute(_CASE_SQL + " WHERE b.site_id = ? AND b.encounter_id = ? ORDER BY b.version DESC",
-                                (site_id, row["encounter_id"])).fetchall()  # fmt: skip
-        notes = conn.execute("SELECT note, delivered_at FROM notes WHERE site_id = ? AND encounter_id = ? ORDER BY seq",
-                             (site_id, row["encounter_id"])).fetchall()  # fmt: skip
-        return CaseDetail(case=_item(row), manifest=msgspec.json.decode(row["manifest"], type=BundleManifest),
-                          versions=[_item(v) for v in versions],
-                          notes=[NoteStatus(note=msgspec.json.decode(n["note"], type=ConsultationNote),
-                                            delivered_at=n["delivered_at"]) for n in notes])  # fmt: skip
+        versions = conn.execute(
+            _CASE_SQL + " WHERE b.site_id = ? AND b.encounter_id = ? ORDER BY b.version DESC",
+            (site_id, row["encounter_id"]),
+        ).fetchall()
+        notes = conn.execute(
+            "SELECT note, delivered_at FROM notes WHERE site_id = ? AND encounter_id = ? ORDER BY seq",
+            (site_id, row["encounter_id"]),
+        ).fetchall()
+        return CaseDetail(
+            case=_item(row),
+            manifest=msgspec.json.decode(row["manifest"], type=BundleManifest),
+            versions=[_item(v) for v in versions],
+            notes=[
+                NoteStatus(note=msgspec.json.decode(n["note"], type=ConsultationNote), delivered_at=n["delivered_at"])
+                for n in notes
+            ],
+        )
 
     def part(self, who: Principal, site_id: str, bundle_id: str, name: str) -> tuple[bytes, str]:
         _require(who, READERS)
@@ -80,33 +89,59 @@ class CaseService:
         """Store a consultant's note and seal it for the clinic, which fetches it at its next round."""
         _require(who, frozenset({Role.consultant}))
         with self.db.write() as conn:
-            row = conn.execute("SELECT * FROM bundles WHERE site_id = ? AND bundle_id = ?", (site_id, bundle_id))\
-                .fetchone()  # fmt: skip
+            row = conn.execute(
+                "SELECT * FROM bundles WHERE site_id = ? AND bundle_id = ?", (site_id, bundle_id)
+            ).fetchone()
             if row is None:
                 raise NotFound(f"no case {bundle_id} from {site_id}")
             clinic = _clinic(conn, site_id)
             note = ConsultationNote(
-                note_id=str(uuid.uuid4()), encounter_id=row["encounter_id"], patient_id=row["patient_id"],
-                bundle_id=bundle_id, bundle_version=row["version"], center_id=self.keys.site_id,
-                consultant=_display(conn, who), consultant_user_id=who.user_id, written_at=iso(utcnow()),
-                recommendation=body.recommendation, advice=body.advice,
-            )  # fmt: skip
-            cur = conn.execute("INSERT INTO notes (note_id, site_id, encounter_id, bundle_id, consultant_user_id, note,"
-                               " written_at) VALUES (?,?,?,?,?,?,?)",
-                               (note.note_id, site_id, note.encounter_id, bundle_id, who.user_id,
-                                msgspec.json.encode(note).decode(), note.written_at))  # fmt: skip
+                note_id=str(uuid.uuid4()),
+                encounter_id=row["encounter_id"],
+                patient_id=row["patient_id"],
+                bundle_id=bundle_id,
+                bundle_version=row["version"],
+                center_id=self.keys.site_id,
+                consultant=_display(conn, who),
+                consultant_user_id=who.user_id,
+                written_at=iso(utcnow()),
+                recommendation=body.recommendation,
+                advice=body.advice,
+            )
+            cur = conn.execute(
+                "INSERT INTO notes (note_id, site_id, encounter_id, bundle_id, consultant_user_id, note,"
+                " written_at) VALUES (?,?,?,?,?,?,?)",
+                (
+                    note.note_id,
+                    site_id,
+                    note.encounter_id,
+                    bundle_id,
+                    who.user_id,
+                    msgspec.json.encode(note).decode(),
+                    note.written_at,
+                ),
+            )
             message = seal_note(self.keys, clinic, cur.lastrowid, note)
             conn.execute("UPDATE notes SET message = ? WHERE seq = ?", (msgspec.msgpack.encode(message), cur.lastrowid))
-            audit.append(conn, action="consultation.write", user_id=who.user_id, device_id=None, kind="consultation",
-                         record_id=note.note_id, detail=f"{note.recommendation.value} for encounter "
-                         f"{note.encounter_id} at {site_id} (bundle {bundle_id} v{row['version']})")  # fmt: skip
+            audit.append(
+                conn,
+                action="consultation.write",
+                user_id=who.user_id,
+                device_id=None,
+                kind="consultation",
+                record_id=note.note_id,
+                detail=f"{note.recommendation.value} for encounter "
+                f"{note.encounter_id} at {site_id} (bundle {bundle_id} v{row['version']})",
+            )
         return NoteStatus(note=note, delivered_at=None)
 
     def rejections(self, who: Principal, limit: int = 100) -> list[RejectionItem]:
         _require(who, frozenset({Role.admin, Role.consultant}))
         rows = self.db.connection().execute("SELECT * FROM rejections ORDER BY id DESC LIMIT ?", (limit,))
-        return [RejectionItem(at=r["at"], site_id=r["site_id"], code=r["code"], reason=r["reason"], key=r["key"])
-                for r in rows]  # fmt: skip
+        return [
+            RejectionItem(at=r["at"], site_id=r["site_id"], code=r["code"], reason=r["reason"], key=r["key"])
+            for r in rows
+        ]
 
 
 def _require(who: Principal, roles: frozenset[Role]) -> None:
@@ -128,8 +163,17 @@ def _display(conn: sqlite3.Connection, who: Principal) -> str:
 
 def _item(row: sqlite3.Row) -> CaseItem:
     identity = msgspec.json.decode(row["peer_identity"], type=SiteIdentity)
-    return CaseItem(site_id=row["site_id"], site_name=identity.name, bundle_id=row["bundle_id"],
-                    encounter_id=row["encounter_id"], patient_id=row["patient_id"], version=row["version"],
-                    urgency=Urgency(row["urgency"]), summary=msgspec.json.decode(row["summary"], type=CaseSummary),
-                    stored_at=row["stored_at"], superseded_by=row["superseded_by"], notes=row["notes"],
-                    awaiting_advice=row["notes_since"] == 0)  # fmt: skip
+    return CaseItem(
+        site_id=row["site_id"],
+        site_name=identity.name,
+        bundle_id=row["bundle_id"],
+        encounter_id=row["encounter_id"],
+        patient_id=row["patient_id"],
+        version=row["version"],
+        urgency=Urgency(row["urgency"]),
+        summary=msgspec.json.decode(row["summary"], type=CaseSummary),
+        stored_at=row["stored_at"],
+        superseded_by=row["superseded_by"],
+        notes=row["notes"],
+        awaiting_advice=row["notes_since"] == 0,
+    )

@@ -109,9 +109,12 @@ class Endpoint:
         log.warning("rejected %s (%s): %s", key, exc.code, exc.detail)
         try:
             with self.db.write() as conn:
-                conn.execute("INSERT INTO rejections (at, site_id, code, reason, key) VALUES (?,?,?,?,?)",
-                             (iso(utcnow()), site_id, exc.code, exc.detail, key[:500]))  # fmt: skip
-                conn.execute("DELETE FROM rejections WHERE id <= (SELECT MAX(id) FROM rejections) - ?",
-                             (KEEP_REJECTIONS,))  # fmt: skip
+                conn.execute(
+                    "INSERT INTO rejections (at, site_id, code, reason, key) VALUES (?,?,?,?,?)",
+                    (iso(utcnow()), site_id, exc.code, exc.detail, key[:500]),
+                )
+                conn.execute(
+                    "DELETE FROM rejections WHERE id <= (SELECT MAX(id) FROM rejections) - ?", (KEEP_REJECTIONS,)
+                )
         except BurnedgeError as exc2:
             log.warning("could not record the rejection: %s", exc2.detail)
