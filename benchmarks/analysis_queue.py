@@ -23,7 +23,7 @@ import time
 from pathlib import Path
 
 from benchmarks.http_load import request, run_load
-from gateway.demo_client import GatewayClient
+from burnedge.demo_client import GatewayClient
 from tests.conftest import FAST_HASH_ENV, GatewayProcess, add_user_cli, encounter_body, free_port, login
 from tests.conftest import patient_body as patient
 
@@ -37,7 +37,7 @@ def photos(work: Path) -> Path:
         return SHARED_SET
     out = work / "phantom"
     subprocess.run(
-        [sys.executable, "-m", "gateway.cli", "phantom", "--out", str(out), "--views", "12", "--seed", "21"],
+        [sys.executable, "-m", "burnedge.cli", "phantom", "--out", str(out), "--views", "12", "--seed", "21"],
         check=True,
         cwd=REPO,
         capture_output=True,
@@ -48,7 +48,7 @@ def photos(work: Path) -> Path:
 def direct(images: Path, out: Path) -> float:
     start = time.perf_counter()
     subprocess.run(
-        [sys.executable, "-m", "gateway.cli", "analyze", str(images), "--out", str(out)],
+        [sys.executable, "-m", "burnedge.cli", "analyze", str(images), "--out", str(out)],
         check=True,
         cwd=REPO,
         capture_output=True,

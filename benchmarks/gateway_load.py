@@ -43,7 +43,7 @@ def _start(args: list[str], port: int) -> subprocess.Popen:
     deadline = time.monotonic() + 60
     while time.monotonic() < deadline:
         try:
-            httpx.get(f"http://127.0.0.1:{port}/health" if "gateway.cli" in args else f"http://127.0.0.1:{port}/bare")
+            httpx.get(f"http://127.0.0.1:{port}/health" if "burnedge.cli" in args else f"http://127.0.0.1:{port}/bare")
             return proc
         except httpx.HTTPError as exc:
             if proc.poll() is not None:
@@ -118,7 +118,7 @@ def main(argv: list[str] | None = None) -> dict:
             [
                 sys.executable,
                 "-m",
-                "gateway.cli",
+                "burnedge.cli",
                 "--db",
                 str(db),
                 "users",
@@ -136,7 +136,7 @@ def main(argv: list[str] | None = None) -> dict:
             capture_output=True,
         )
         gw_port, bare_port = _free_port(), _free_port()
-        gateway = _start(["-m", "gateway.cli", "--db", str(db), "serve", "--port", str(gw_port)], gw_port)
+        gateway = _start(["-m", "burnedge.cli", "--db", str(db), "serve", "--port", str(gw_port)], gw_port)
         bare = _start(["-m", "benchmarks.bare_app", str(bare_port)], bare_port)
         try:
             headers, ids = _seed(gw_port, args.connections)

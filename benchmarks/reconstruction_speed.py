@@ -53,7 +53,7 @@ def _child(args: list[str]) -> tuple[float, int, str]:
 def render(out: Path) -> float:
     t = time.perf_counter()
     subprocess.run(
-        [sys.executable, "-m", "gateway.cli", "phantom", "--out", str(out), "--views", "12", "--seed", "1"],
+        [sys.executable, "-m", "burnedge.cli", "phantom", "--out", str(out), "--views", "12", "--seed", "1"],
         cwd=REPO,
         check=True,
         capture_output=True,
@@ -78,7 +78,7 @@ def main() -> None:
             seconds_b, registered_b = out_b.split()[-2:]
             out = Path(tmp) / f"analysis{run}"
             wall, rss, out_p = _child(
-                [sys.executable, "-m", "gateway.cli", "reconstruct", str(images), "--out", str(out)]
+                [sys.executable, "-m", "burnedge.cli", "reconstruct", str(images), "--out", str(out)]
             )
             report = json.loads(out_p)
             stages = {t["stage"]: t["seconds"] for t in report["timings"]}

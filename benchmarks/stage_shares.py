@@ -26,8 +26,8 @@ import msgspec
 from processing.analysis import measure, surface_map
 from processing.analysis.pipeline import run as analyze
 from processing.reconstruction import pipeline as reconstruction
-from processing.reconstruction.artifacts import read_json
 from processing.reconstruction.dense import DenseInfo
+from processing.stages import read_json
 from schemas.config import Config
 
 SHARED = Path(__file__).resolve().parents[2] / "shared" / "phantoms"

@@ -31,12 +31,12 @@ from pathlib import Path
 
 import zenoh
 
+from base.folders import keys_dir
 from gateway.storage.database import Database
 from schemas.config import load_config
 from sync.keys import load_keys
 from sync.outbox import Outbox
 from sync.sender import Sender
-from sync.service import keys_dir
 from sync.zenoh_link import _no_discovery_no_shm, _set
 from tests.conftest import FAST_HASH_ENV, free_port
 from tests.sync_sites import Sites, record_case

@@ -7,21 +7,21 @@ from litestar.datastructures import State
 from litestar.di import Provide
 from litestar.openapi import OpenAPIConfig
 
-from gateway import __version__
-from gateway.authentication import session_auth
+from base import __version__
+from base.web.account_controllers import AdminController, AuthController
+from base.web.authentication import session_auth
+from base.web.errors import EXCEPTION_HANDLERS
+from base.web.health import health
+from base.web.openapi import ClosedStructSchemaPlugin
 from gateway.controllers.analyses import AnalysisController
 from gateway.controllers.assets import AssetController
-from gateway.controllers.auth import AdminController, AuthController
-from gateway.controllers.health import health
 from gateway.controllers.parts import PART_CONTROLLERS
 from gateway.controllers.records import EncounterController, PatientController
 from gateway.controllers.sync import SyncController
 from gateway.controllers.transfers import TransferController
 from gateway.controllers.uploads import UploadController
 from gateway.dependencies import Services, provide_services
-from gateway.errors import EXCEPTION_HANDLERS
 from gateway.jobs.supervisor import Workers
-from gateway.openapi import ClosedStructSchemaPlugin
 from gateway.scheduler import start_scheduler
 from gateway.storage.database import Database
 from schemas.config import Config

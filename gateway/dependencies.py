@@ -7,21 +7,23 @@ from dataclasses import dataclass
 from typing import Annotated
 
 from litestar import Request
-from litestar.datastructures import State
 from litestar.params import Dependency
 
-from gateway.services.accounts import AccountService
+from base.accounts.permissions import Principal
+from base.accounts.service import AccountService
+from base.folders import media_root
+from base.storage.blobs import MediaStore
+from gateway.services import audit_trail
 from gateway.services.analyses import AnalysisService
 from gateway.services.assets import AssetService
 from gateway.services.frames import FrameService
-from gateway.services.permissions import Principal
+from gateway.services.phone_sync import PhoneSync
 from gateway.services.records import RecordService
 from gateway.services.transfers import TransferService
 from gateway.services.uploads import UploadService
-from gateway.storage.blobs import MediaStore, media_root
 from gateway.storage.database import Database
+from schemas.audit import AuditVerification
 from schemas.config import Config
-from sync.phone_sync import PhoneSync
 
 
 @dataclass
@@ -38,6 +40,9 @@ class Services:
     transfers: TransferService
     run_sync_now: Callable[[], None] = lambda: None
     """Starts a sync round at once (set by the scheduler when [sync] enabled)."""
+
+    def verify_audit(self, principal: Principal | None) -> AuditVerification:
+        return audit_trail.verify(self.db, principal, self.config)
 
     @classmethod
     def build(cls, config: Config, db: Database) -> Services:
@@ -62,17 +67,5 @@ def provide_services(request: Request) -> Services:
     return request.app.state.services
 
 
-def client_address(request: Request) -> str:
-    return request.client.host if request.client else "unknown"
-
-
 ServicesDep = Annotated[Services, Dependency(skip_validation=True)]
-"""Declared by name ("services"); the app factory provides it. Not validated: the burn center's server provides
-its own services object to the shared account handlers (login, users)."""
-
-AuthedRequest = Request[Principal, str, State]
-"""A request the session middleware has authenticated: request.user is the Principal.
-
-Handlers read the principal from here rather than through a second dependency:
-resolving a request-bound dependency cost about a third of a record read's throughput.
-"""
+"""Declared by name ("services"); the app factory provides it. Not validated: it is the app's own object."""

@@ -1,7 +1,7 @@
 """The error hierarchy shared by every package.
 
 Library code raises these; the gateway maps them to problem+json and the CLI to exit
-codes, each in one place (gateway/errors.py, gateway/cli.py). They live beside the
+codes, each in one place (base/web/errors.py, burnedge/cli.py). They live beside the
 schemas because every other package already depends on this one.
 """
 

@@ -2,7 +2,7 @@
 
 Patterns are written for Python, where msgspec searches them (`\\A...\\Z` anchors a whole string). JSON Schema
 patterns are ECMA-262: there `\\A` is an error in unicode mode and `^...$` already anchors the whole string, so
-exported schemas (and the gateway's OpenAPI document, gateway/openapi.py) carry that form.
+exported schemas (and the gateway's OpenAPI document, base/web/openapi.py) carry that form.
 """
 
 from __future__ import annotations

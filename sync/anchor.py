@@ -11,15 +11,16 @@ from pathlib import Path
 
 import msgspec
 
-from gateway.storage import audit
-from gateway.storage.database import Database
-from gateway.storage.durable import replace_atomically
+from base.folders import keys_dir
+from base.storage import audit
+from base.storage.database import Database
+from base.storage.durable import replace_atomically
 from schemas.audit import AuditAnchor, AuditHead
 from schemas.base import iso, utcnow
 from schemas.config import Config
 from schemas.errors import InvalidInput, TransferRejected
 from schemas.transfer import AnchorReply, AnchorRequest, SignedEnvelope, SiteIdentity
-from sync.keys import SiteKeys, keys_dir, verify_envelope
+from sync.keys import SiteKeys, verify_envelope
 from sync.wire import request
 from sync.zenoh_link import Keys
 

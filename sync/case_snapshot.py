@@ -8,9 +8,10 @@ from dataclasses import dataclass
 
 import msgspec
 
-from gateway.jobs import folders
-from gateway.storage import records as store
-from gateway.storage.blobs import MediaStore, media_root
+from base import folders
+from base.folders import media_root
+from base.storage import records as store
+from base.storage.blobs import MediaStore
 from schemas.base import iso, utcnow
 from schemas.clinical_results import Assessment, ReferralTier
 from schemas.config import Config
@@ -51,7 +52,7 @@ def snapshot(conn: sqlite3.Connection, config: Config, encounter_id: str) -> Sna
         job_id = analysis.meta.id
         parts.append(PartData(f"analyses/{job_id}/record.json", msgspec.json.encode(analysis)))
         folder = folders.analysis_dir(config, job_id)
-        for name in folders.artifacts(config, job_id, ANALYSIS_FILES):
+        for name in folders.matching_files(folder, ANALYSIS_FILES):
             parts.append(PartData(f"analyses/{job_id}/{name}", (folder / name).read_bytes()))
     parts += _pictures(conn, MediaStore(media_root(config)), encounter_id, config.sync.pictures)
     return Snapshot(record=record, analyses=analyses, parts=parts)

@@ -18,7 +18,6 @@ from nacl.public import PrivateKey
 from nacl.signing import SigningKey, VerifyKey
 
 from schemas.base import Frozen, ShortText
-from schemas.config import Config
 from schemas.errors import InvalidInput, MissingKeys
 from schemas.transfer import PROTOCOL, SignedEnvelope, SiteId, SiteIdentity, SiteRole
 
@@ -60,13 +59,6 @@ class SiteKeys:
         body = msgspec.msgpack.encode(message)
         signature = self.signing.sign(_signed_bytes(kind, self.site_id, body)).signature
         return SignedEnvelope(protocol=PROTOCOL, kind=kind, signer=self.site_id, body=body, signature=signature)
-
-
-def keys_dir(config: Config) -> Path:
-    """The clinic's keys folder (also where the burn center's newest audit anchor is kept)."""
-    if config.sync.keys_dir:
-        return Path(config.sync.keys_dir)
-    return Path(config.gateway.database).resolve().parent / "burnedge-keys"
 
 
 def init_keys(keys_dir: Path, site_id: str, role: SiteRole, name: str, *, force: bool = False) -> SiteKeys:

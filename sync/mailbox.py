@@ -11,9 +11,9 @@ import logging
 
 import msgspec
 
-from gateway.storage import audit
-from gateway.storage import records as store
-from gateway.storage.database import Database
+from base.storage import audit
+from base.storage import records as store
+from base.storage.database import Database
 from schemas.base import iso, utcnow
 from schemas.config import Config
 from schemas.errors import TransferRejected

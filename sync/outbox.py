@@ -13,13 +13,13 @@ import shutil
 import sqlite3
 import threading
 import uuid
-from pathlib import Path
 
 import msgspec
 
-from gateway.storage import audit
-from gateway.storage.database import Database
-from gateway.storage.durable import fsync_dir, write_file
+from base.folders import outbox_root
+from base.storage import audit
+from base.storage.database import Database
+from base.storage.durable import fsync_dir, write_file
 from schemas.base import iso, utcnow
 from schemas.config import Config
 from schemas.errors import Conflict, NotFound
@@ -31,12 +31,6 @@ from sync.sealing import seal
 log = logging.getLogger("burnedge.sync")
 _envelope = msgspec.msgpack.Decoder(SignedEnvelope)
 _queue_lock = threading.Lock()
-
-
-def outbox_root(config: Config) -> Path:
-    if config.sync.outbox_dir:
-        return Path(config.sync.outbox_dir)
-    return Path(config.gateway.database).resolve().parent / "burnedge-outbox"
 
 
 class Outbox:

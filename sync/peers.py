@@ -6,8 +6,8 @@ import sqlite3
 
 import msgspec
 
-from gateway.storage import audit
-from gateway.storage.database import Database
+from base.storage import audit
+from base.storage.database import Database
 from schemas.base import iso, utcnow
 from schemas.errors import Conflict, NotFound, TransferRejected
 from schemas.transfer import Peer, SiteIdentity, SiteRole

@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 import msgspec
 import zenoh
 
-from gateway.storage.database import Database
+from base.storage.database import Database
 from schemas.audit import AuditAnchor
 from schemas.config import Config
 from schemas.errors import TransferRejected

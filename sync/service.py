@@ -12,14 +12,15 @@ import logging
 import random
 import threading
 
-from gateway.storage.database import Database
+from base.folders import keys_dir
+from base.storage.database import Database
 from schemas.base import iso, utcnow
 from schemas.config import Config
 from schemas.errors import BurnedgeError
 from schemas.transfer import OutboxEntry, OutboxState, SyncStatus
 from sync import peers
 from sync.anchor import anchor_path, load_anchor
-from sync.keys import SiteKeys, keys_dir, load_keys
+from sync.keys import SiteKeys, load_keys
 from sync.outbox import Outbox
 from sync.sender import RoundReport, Sender
 from sync.wire import LinkDown

@@ -121,7 +121,7 @@ def add_user_cli(db: Path, username: str, role: str) -> None:
         [
             sys.executable,
             "-m",
-            "gateway.cli",
+            "burnedge.cli",
             "--db",
             str(db),
             "users",
@@ -158,7 +158,7 @@ class GatewayProcess:
         # A file, not a pipe: a full pipe nobody reads would block the gateway and its workers on their next log line.
         with open(self.log, "ab") as log:
             self.proc = subprocess.Popen(
-                [sys.executable, "-m", "gateway.cli", "--db", str(self.db), "serve", "--port", str(self.port)],
+                [sys.executable, "-m", "burnedge.cli", "--db", str(self.db), "serve", "--port", str(self.port)],
                 env=env,
                 stdout=log,
                 stderr=subprocess.STDOUT,

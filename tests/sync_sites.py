@@ -13,7 +13,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from gateway.demo_client import GatewayClient
+from burnedge.demo_client import GatewayClient
 from tests.conftest import (
     FAST_HASH_ENV,
     PASSWORD,
@@ -32,7 +32,7 @@ CENTER = "center-test"
 
 def cli(*args: str, env: dict[str, str] | None = None, stdin: str | None = None) -> str:
     r = subprocess.run(
-        [sys.executable, "-m", "gateway.cli", *args],
+        [sys.executable, "-m", "burnedge.cli", *args],
         capture_output=True,
         text=True,
         cwd=REPO,
@@ -82,7 +82,7 @@ class CenterProcess:
     def start(self, timeout: float = 30.0) -> CenterProcess:
         with open(self.log, "ab") as log:
             self.proc = subprocess.Popen(
-                [sys.executable, "-m", "gateway.cli", "central", "--site-id", CENTER, "--name", "Test burn center"],
+                [sys.executable, "-m", "burnedge.cli", "central", "--site-id", CENTER, "--name", "Test burn center"],
                 cwd=REPO,
                 stdout=log,
                 stderr=subprocess.STDOUT,

@@ -25,7 +25,7 @@ SECRETS = (PASSWORD, TEMPORARY, NEW, "wrong current one")
 
 def cli(db: Path, *args: str, stdin: str | None = None, env: dict | None = None) -> subprocess.CompletedProcess:
     return subprocess.run(
-        [sys.executable, "-m", "gateway.cli", "--db", str(db), "users", *args],
+        [sys.executable, "-m", "burnedge.cli", "--db", str(db), "users", *args],
         input=stdin,
         capture_output=True,
         text=True,
@@ -40,7 +40,7 @@ def typed(db: Path, *args: str, answers: tuple[str, str]) -> tuple[int, str]:
     master, slave = os.openpty()
     # A new session has no controlling terminal, so getpass reads the pty given as stdin (with echo off).
     proc = subprocess.Popen(
-        [sys.executable, "-m", "gateway.cli", "--db", str(db), "users", *args],
+        [sys.executable, "-m", "burnedge.cli", "--db", str(db), "users", *args],
         stdin=slave,
         stdout=slave,
         stderr=slave,
@@ -235,7 +235,7 @@ def test_users_passwd_sets_a_password_and_with_temporary_forces_a_change(gw, htt
     details = [e["detail"] for e in audited(http, user_id) if e["action"] == "user.password_reset"]
     assert details == ["care.cli; 1 sessions ended", "care.cli; must change it at next sign-in; 2 sessions ended"]
     verified = subprocess.run(
-        [sys.executable, "-m", "gateway.cli", "--db", str(gw.db), "audit", "verify"],
+        [sys.executable, "-m", "burnedge.cli", "--db", str(gw.db), "audit", "verify"],
         capture_output=True,
         text=True,
         cwd=REPO,

@@ -10,7 +10,7 @@ import cv2
 import numpy as np
 import pytest
 
-from gateway.demo_client import GatewayClient, GatewayError
+from burnedge.demo_client import GatewayClient, GatewayError
 from processing.phantom.generate import run as render_phantom
 from schemas.errors import NotFound
 from schemas.phantom import PhantomShape, PhantomSpec

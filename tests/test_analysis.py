@@ -29,7 +29,7 @@ from tests.phantom_helpers import SMALL, hide_marker, render_small_patch
 
 def cli(*args: str) -> subprocess.CompletedProcess:
     return subprocess.run(
-        [sys.executable, "-m", "gateway.cli", *args], capture_output=True, text=True, cwd=REPO, timeout=600
+        [sys.executable, "-m", "burnedge.cli", *args], capture_output=True, text=True, cwd=REPO, timeout=600
     )
 
 

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from gateway.demo_client import GatewayClient
+from burnedge.demo_client import GatewayClient
 from processing.capture.stamp import with_capture_time
 from tests.conftest import GatewayProcess, add_user_cli, encounter_body, free_port, login, patient_body
 from tests.phantom_helpers import SMALL, render_small_patch

@@ -7,7 +7,7 @@ import sqlite3
 import subprocess
 import sys
 
-from gateway.storage import audit
+from base.storage import audit
 from tests.conftest import REPO, encounter_body, patient_body
 
 
@@ -72,7 +72,7 @@ def test_a_rewritten_entry_with_a_recomputed_hash_breaks_the_next_link(client, a
 
 
 def _cli(*args: str) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "gateway.cli", *args], capture_output=True, text=True, cwd=REPO)
+    return subprocess.run([sys.executable, "-m", "burnedge.cli", *args], capture_output=True, text=True, cwd=REPO)
 
 
 def test_cli_audit_verify_exit_code_and_message(client, auth, services, config):

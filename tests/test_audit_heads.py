@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from gateway.storage import audit
+from base.storage import audit
 from schemas.audit import AuditAnchor, AuditHead
 from schemas.base import iso, utcnow
 from schemas.transfer import SiteRole

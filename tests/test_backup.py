@@ -14,9 +14,9 @@ from pathlib import Path
 import msgspec
 import pytest
 
+from burnedge.demo_client import GatewayClient
 from gateway.backup import snapshot
 from gateway.backup.stream import MAGIC
-from gateway.demo_client import GatewayClient
 from gateway.storage.database import Database
 from schemas.config import Config, GatewayConfig
 from schemas.ids import uuid7
@@ -35,7 +35,7 @@ FAST_BACKUP_ENV = {
 
 def burnedge(*args: str, env: dict[str, str] | None = None) -> subprocess.CompletedProcess:
     return subprocess.run(
-        [sys.executable, "-m", "gateway.cli", *args],
+        [sys.executable, "-m", "burnedge.cli", *args],
         capture_output=True,
         text=True,
         cwd=REPO,
@@ -49,7 +49,7 @@ def serve(config: Path, folder: Path) -> tuple[subprocess.Popen, str]:
     log = folder / "restored-gateway.log"
     with open(log, "ab") as out:
         proc = subprocess.Popen(
-            [sys.executable, "-m", "gateway.cli", "--config", str(config), "serve", "--port", str(port)],
+            [sys.executable, "-m", "burnedge.cli", "--config", str(config), "serve", "--port", str(port)],
             cwd=REPO,
             stdout=out,
             stderr=subprocess.STDOUT,
@@ -357,7 +357,7 @@ def test_a_passphrase_is_never_taken_from_nowhere(tmp_path):
     db = tmp_path / "g.sqlite3"
     Database(db).migrate()
     r = subprocess.run(
-        [sys.executable, "-m", "gateway.cli", "--db", str(db), "backup", "--out", str(tmp_path / "b")],
+        [sys.executable, "-m", "burnedge.cli", "--db", str(db), "backup", "--out", str(tmp_path / "b")],
         capture_output=True,
         text=True,
         cwd=REPO,

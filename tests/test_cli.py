@@ -12,7 +12,7 @@ import sys
 import msgspec
 import pytest
 
-from gateway.cli import build_parser
+from burnedge.cli import build_parser
 from schemas.export import public_messages
 from tests.conftest import REPO
 
@@ -75,14 +75,16 @@ def test_every_option_of_every_command_is_documented_with_it_in_the_readme(comma
 def test_every_command_help_shows_an_example(command, parser):
     name = " ".join(("burnedge", *command))
     text = parser.format_help()
-    assert "examples:" in text, f"`{name} --help` shows no example: give its parser examples(...) (gateway/cli_help.py)"
+    assert "examples:" in text, (
+        f"`{name} --help` shows no example: give its parser examples(...) (burnedge/cli_help.py)"
+    )
     shown = text[text.index("examples:") :].splitlines()[1:]
     assert any(name in line for line in shown), f"`{name} --help`: no example runs `{name}`"
 
 
 def test_schemas_export_writes_a_json_schema_per_message(tmp_path):
     r = subprocess.run(
-        [sys.executable, "-m", "gateway.cli", "schemas", "export", str(tmp_path)],
+        [sys.executable, "-m", "burnedge.cli", "schemas", "export", str(tmp_path)],
         capture_output=True,
         text=True,
         cwd=REPO,
@@ -132,7 +134,7 @@ def test_users_add_rejects_a_short_password(tmp_path):
         [
             sys.executable,
             "-m",
-            "gateway.cli",
+            "burnedge.cli",
             "--db",
             str(tmp_path / "u.sqlite3"),
             "users",
@@ -153,7 +155,7 @@ def test_users_add_rejects_a_short_password(tmp_path):
 
 def test_demo_seeds_a_patient_with_calculated_results_and_is_idempotent(tmp_path):
     db = tmp_path / "demo.sqlite3"
-    args = [sys.executable, "-m", "gateway.cli", "--db", str(db), "demo", "--no-series", "--exit"]
+    args = [sys.executable, "-m", "burnedge.cli", "--db", str(db), "demo", "--no-series", "--exit"]
     env = {
         "BURNEDGE_SECURITY_ARGON2_MEMORY_KIB": "8",
         "BURNEDGE_SECURITY_ARGON2_TIME_COST": "1",
@@ -170,10 +172,10 @@ def test_demo_seeds_a_patient_with_calculated_results_and_is_idempotent(tmp_path
 
 
 def test_version_and_every_exit_code_are_in_the_readme():
-    from gateway import __version__
-    from gateway.cli import EXIT_CODES
+    from base import __version__
+    from burnedge.cli import EXIT_CODES
 
-    r = subprocess.run([sys.executable, "-m", "gateway.cli", "--version"], capture_output=True, text=True, cwd=REPO)
+    r = subprocess.run([sys.executable, "-m", "burnedge.cli", "--version"], capture_output=True, text=True, cwd=REPO)
     assert r.returncode == 0 and r.stdout.strip() == f"burnedge {__version__}"
     readme = (REPO / "README.md").read_text()
     codes = readme[readme.index("Exit codes:") :].split("\n\n")[0]
@@ -185,7 +187,7 @@ def test_version_and_every_exit_code_are_in_the_readme():
 def test_global_options_work_before_and_after_the_command(tmp_path):
     missing = str(tmp_path / "nope.sqlite3")
     for args in (["--db", missing, "audit", "verify"], ["audit", "verify", "--db", missing]):
-        r = subprocess.run([sys.executable, "-m", "gateway.cli", *args], capture_output=True, text=True, cwd=REPO)
+        r = subprocess.run([sys.executable, "-m", "burnedge.cli", *args], capture_output=True, text=True, cwd=REPO)
         assert r.returncode == 3 and f"no database at {missing}" in r.stderr, (args, r.stderr)
     config = tmp_path / "burnedge.toml"
     config.write_text(f'[gateway]\ndatabase = "{tmp_path / "from-config.sqlite3"}"\n')

@@ -16,7 +16,7 @@ def test_the_demo_uploads_analyses_and_aligns_four_visits_then_exits(tmp_path):
     args = [
         sys.executable,
         "-m",
-        "gateway.cli",
+        "burnedge.cli",
         "--db",
         str(db),
         "demo",

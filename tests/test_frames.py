@@ -16,8 +16,8 @@ import numpy as np
 import pytest
 
 import gateway.services.frames as frames_service
-from gateway.storage import audit, blobs
-from gateway.storage.blobs import MediaStore
+from base.storage import audit, blobs
+from base.storage.blobs import MediaStore
 from processing.capture import media
 from processing.capture.frames import extract
 from schemas.config import FramesConfig, QualityGateConfig, UploadConfig
@@ -105,7 +105,7 @@ def test_cli_frames_on_the_phantom_orbit_video(tmp_path):
         [
             sys.executable,
             "-m",
-            "gateway.cli",
+            "burnedge.cli",
             "frames",
             str(SHARED / "phantoms" / "p2_foot" / "video.mp4"),
             "--out",

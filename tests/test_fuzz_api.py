@@ -29,7 +29,7 @@ from schemathesis.specs.openapi.checks import (
     status_code_conformance,
 )
 
-from gateway.errors import TUS_PATH
+from base.web.errors import TUS_PATH
 from schemas.capture import TUS_VERSION
 from tests.conftest import PASSWORD, REPO, add_user_cli, encounter_body, patient_body
 
@@ -146,7 +146,7 @@ def test_every_operation_answers_as_the_published_schema_says(gateway_process):
         [
             sys.executable,
             "-m",
-            "gateway.cli",
+            "burnedge.cli",
             "--db",
             str(gateway_process.db),
             "keys",

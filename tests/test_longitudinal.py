@@ -18,10 +18,10 @@ import pytest
 from scipy import ndimage, stats
 
 from benchmarks.healing_track import eval_skin, rms_apart, to_world
-from gateway.cli import main as cli_main
+from burnedge.cli import main as cli_main
 from processing.longitudinal import healing, registration, track
 from processing.phantom.generate import run_series
-from processing.reconstruction.artifacts import write_json
+from processing.stages import write_json
 from schemas.analysis import AnalysisResult, AnalysisStatus, BurnMetrics
 from schemas.config import TrackingConfig
 from schemas.errors import InvalidInput
@@ -35,7 +35,7 @@ CONF = TrackingConfig()
 
 def cli(*args: str) -> subprocess.CompletedProcess:
     return subprocess.run(
-        [sys.executable, "-m", "gateway.cli", *args], capture_output=True, text=True, cwd=REPO, timeout=600
+        [sys.executable, "-m", "burnedge.cli", *args], capture_output=True, text=True, cwd=REPO, timeout=600
     )
 
 

@@ -236,7 +236,7 @@ def test_a_burn_too_large_for_the_body_part_is_refused():
 
 def test_cli_refuses_out_of_range_views_with_exit_2(tmp_path):
     r = subprocess.run(
-        [sys.executable, "-m", "gateway.cli", "phantom", "--out", str(tmp_path), "--views", "30"],
+        [sys.executable, "-m", "burnedge.cli", "phantom", "--out", str(tmp_path), "--views", "30"],
         capture_output=True,
         text=True,
         cwd=REPO,

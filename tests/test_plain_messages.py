@@ -24,7 +24,7 @@ FAKE_JPEG = b"\xff\xd8\xff\xe0" + b"\x13junk" * 500
 
 def _cli(*args: str) -> subprocess.CompletedProcess:
     return subprocess.run(
-        [sys.executable, "-m", "gateway.cli", *args], capture_output=True, text=True, cwd=REPO, timeout=120
+        [sys.executable, "-m", "burnedge.cli", *args], capture_output=True, text=True, cwd=REPO, timeout=120
     )
 
 

@@ -120,14 +120,17 @@ def test_cli_gate_prints_one_verdict_per_file(tmp_path):
     good.write_bytes(jpeg(scene()))
     blurred.write_bytes(jpeg(cv2.GaussianBlur(scene(), (0, 0), 4)))
     r = subprocess.run(
-        [sys.executable, "-m", "gateway.cli", "gate", str(good), str(blurred)], capture_output=True, text=True, cwd=REPO
+        [sys.executable, "-m", "burnedge.cli", "gate", str(good), str(blurred)],
+        capture_output=True,
+        text=True,
+        cwd=REPO,
     )
     assert r.returncode == 0, r.stderr
     out = json.loads(r.stdout)
     assert [v["accepted"] for v in out] == [True, False]
     assert out[1]["reasons"] == ["blurry"] and out[1]["guidance"] and out[1]["figures"]["local_sharpness"] < 200
     missing = subprocess.run(
-        [sys.executable, "-m", "gateway.cli", "gate", str(tmp_path / "nope.jpg")],
+        [sys.executable, "-m", "burnedge.cli", "gate", str(tmp_path / "nope.jpg")],
         capture_output=True,
         text=True,
         cwd=REPO,

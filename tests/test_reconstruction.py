@@ -183,7 +183,7 @@ def test_too_few_pictures_is_a_clear_failure_and_the_cli_says_so(phantom, tmp_pa
         shutil.copy(phantom / "images" / name, few / name)
     before = _digest(few)
     r = subprocess.run(
-        [sys.executable, "-m", "gateway.cli", "reconstruct", str(few), "--out", str(tmp_path / "out")],
+        [sys.executable, "-m", "burnedge.cli", "reconstruct", str(few), "--out", str(tmp_path / "out")],
         cwd=REPO,
         capture_output=True,
         text=True,
@@ -316,7 +316,16 @@ def test_adding_a_ruler_later_reruns_the_scale_and_what_follows(phantom, unmarke
 
 def test_fresh_refuses_to_delete_the_pictures(phantom, tmp_path):
     r = subprocess.run(
-        [sys.executable, "-m", "gateway.cli", "reconstruct", str(phantom / "images"), "--out", str(phantom), "--fresh"],
+        [
+            sys.executable,
+            "-m",
+            "burnedge.cli",
+            "reconstruct",
+            str(phantom / "images"),
+            "--out",
+            str(phantom),
+            "--fresh",
+        ],
         cwd=REPO,
         capture_output=True,
         text=True,

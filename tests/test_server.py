@@ -42,7 +42,7 @@ def test_a_bad_config_is_a_clear_error(tmp_path):
     cfg = tmp_path / "bad.toml"
     cfg.write_text("[gateway]\nport = 'eighty'\n")
     r = subprocess.run(
-        [sys.executable, "-m", "gateway.cli", "--config", str(cfg), "serve"],
+        [sys.executable, "-m", "burnedge.cli", "--config", str(cfg), "serve"],
         capture_output=True,
         text=True,
         cwd=REPO,

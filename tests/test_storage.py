@@ -8,8 +8,8 @@ import threading
 
 import pytest
 
-from gateway.services.permissions import Principal
-from gateway.storage import audit
+from base.accounts.permissions import Principal
+from base.storage import audit
 from gateway.storage.database import Database
 from schemas.accounts import Role
 from schemas.errors import StorageError, VersionMismatch

@@ -75,7 +75,7 @@ def start_center_in(link: NetnsLink, sites: Sites) -> subprocess.Popen:
     with open(sites.center.log, "ab") as log:
         proc = link.popen(
             "center",
-            [sys.executable, "-m", "gateway.cli", "central", "--site-id", CENTER, "--name", "Test burn center"],
+            [sys.executable, "-m", "burnedge.cli", "central", "--site-id", CENTER, "--name", "Test burn center"],
             cwd=REPO,
             env=env,
             stdout=log,
@@ -94,7 +94,7 @@ def start_gateway_in(link: NetnsLink, sites: Sites) -> subprocess.Popen:
             [
                 sys.executable,
                 "-m",
-                "gateway.cli",
+                "burnedge.cli",
                 "--db",
                 str(sites.gateway.db),
                 "serve",

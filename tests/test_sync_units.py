@@ -80,9 +80,9 @@ def test_the_container_checks_every_part_against_its_manifest():
 
 
 def test_unfinished_transfers_are_dropped_after_the_stale_period(tmp_path: Path):
+    from center.app import open_center_db
+    from center.receiver import Receiver
     from schemas.config import CentralConfig
-    from sync.central.app import open_center_db
-    from sync.central.receiver import Receiver
 
     central = CentralConfig(database=str(tmp_path / "center.sqlite3"))
     db = open_center_db(central)

@@ -17,12 +17,12 @@ import pytest
 import sqlite_utils
 from litestar.testing import TestClient
 
+from center.app import CentralServices, create_central_app
+from center.migrations import central_migrations
 from gateway.app import create_app
 from gateway.storage.database import Database
 from gateway.storage.migrations import migrations
 from schemas.config import CentralConfig, Config, GatewayConfig
-from sync.central.app import CentralServices, create_central_app
-from sync.central.migrations import central_migrations
 from tests.conftest import FAST_HASH_ENV, FAST_SECURITY, REPO, login
 
 FIXTURES = Path(__file__).parent / "fixtures" / "upgrade"
@@ -136,7 +136,7 @@ def test_a_gateway_made_before_sync_is_migrated_with_every_record_file_and_audit
         )
 
     verified = subprocess.run(
-        [sys.executable, "-m", "gateway.cli", "--db", str(db_path), "audit", "verify"],
+        [sys.executable, "-m", "burnedge.cli", "--db", str(db_path), "audit", "verify"],
         capture_output=True,
         text=True,
         cwd=REPO,

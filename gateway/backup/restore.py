@@ -16,12 +16,12 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from base.storage import audit
+from base.storage.durable import fsync_dir
 from gateway.backup import archive
 from gateway.backup.crypto import FileKey
 from gateway.backup.restored_config import FOLDERS, render
 from gateway.backup.stream import DecryptingReader, read_header
-from gateway.storage import audit
-from gateway.storage.durable import fsync_dir
 from schemas.backup import BackupHeader, BackupManifest
 from schemas.errors import Conflict, InvalidInput, NotFound
 

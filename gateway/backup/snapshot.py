@@ -23,14 +23,13 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
-from gateway.jobs.folders import SCRATCH, work_root
-from gateway.storage import audit
-from gateway.storage.blobs import media_root
+from base.folders import keys_dir, media_root, outbox_root, work_root
+from base.storage import audit
+from gateway.jobs.folders import SCRATCH
 from schemas.audit import AuditHead
 from schemas.config import Config
 from schemas.errors import NotFound, StorageError
-from sync.keys import PUBLIC_FILE, keys_dir
-from sync.outbox import outbox_root
+from sync.keys import PUBLIC_FILE
 
 STAGING_PREFIX = ".burnedge-backup-"
 

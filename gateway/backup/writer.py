@@ -17,12 +17,12 @@ from pathlib import Path
 
 import msgspec
 
-from gateway import __version__
+from base import __version__
+from base.storage.durable import fsync_dir
 from gateway.backup import snapshot
 from gateway.backup.archive import ArchiveWriter
 from gateway.backup.crypto import FileKey
 from gateway.backup.stream import EncryptingWriter, new_stream
-from gateway.storage.durable import fsync_dir
 from schemas.backup import BackupHeader, BackupKdf, BackupManifest, BackupRecipient
 from schemas.base import iso, utcnow
 from schemas.config import Config

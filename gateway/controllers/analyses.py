@@ -11,9 +11,10 @@ from litestar.openapi import ResponseSpec
 from litestar.params import FromPath, JSONBody
 from litestar.response import File, ServerSentEvent, ServerSentEventMessage
 
-from gateway.controllers.common import IdPath
-from gateway.controllers.problems import BODY, ONE, problems
-from gateway.dependencies import AuthedRequest, ServicesDep
+from base.web.paths import IdPath
+from base.web.problems import BODY, ONE, problems
+from base.web.site import AuthedRequest
+from gateway.dependencies import ServicesDep
 from schemas.analysis import AnalysisResult
 from schemas.jobs import FINISHED, AnalysisJob, AnalysisRequest, JobAttempt, JobEvent
 from schemas.longitudinal import TrackResult

@@ -5,9 +5,10 @@ from __future__ import annotations
 from litestar import Controller, get
 from litestar.response import File
 
-from gateway.controllers.common import IdPath
-from gateway.controllers.problems import ONE, problems
-from gateway.dependencies import AuthedRequest, ServicesDep
+from base.web.paths import IdPath
+from base.web.problems import ONE, problems
+from base.web.site import AuthedRequest
+from gateway.dependencies import ServicesDep
 from schemas.capture import Asset, CaptureReadiness
 
 

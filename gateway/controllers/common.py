@@ -1,38 +1,15 @@
-"""Helpers shared by the controllers: identifiers in paths, ETags, preconditions, record responses."""
+"""Helpers shared by the gateway's controllers: ETags, preconditions, record responses (identifiers in paths:
+base/web/paths.py)."""
 
 from __future__ import annotations
 
 import re
-from typing import Annotated
 
 from litestar import Response
-from litestar.params import PathParameter
 
 from gateway.services.records import WriteOutcome
-from schemas.base import ID_PATTERN
 from schemas.errors import InvalidInput, PreconditionRequired
-from schemas.export import ecma_pattern
 from schemas.records import Record
-from schemas.transfer import SITE_ID_PATTERN
-
-# The document shows each pattern in its ECMA-262 form (gateway/openapi.py); validation uses the Python one.
-IdPath = Annotated[
-    str,
-    PathParameter(
-        pattern=ID_PATTERN,
-        description="A UUID in canonical lower-case form.",
-        schema_extra={"pattern": ecma_pattern(ID_PATTERN)},
-    ),
-]
-"""An identifier in a path, matched whole: a malformed one is a 400, never a lookup of a different id."""
-SiteIdPath = Annotated[
-    str,
-    PathParameter(
-        pattern=SITE_ID_PATTERN,
-        description="A site's name on the wire.",
-        schema_extra={"pattern": ecma_pattern(SITE_ID_PATTERN)},
-    ),
-]
 
 _ETAG = re.compile(r'^\s*(?:W/)?"?(\d+)"?\s*$')
 

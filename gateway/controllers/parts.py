@@ -11,10 +11,12 @@ from litestar import Controller, Response, delete, get, post, put
 from litestar.openapi import ResponseSpec
 from litestar.params import HeaderParameter, JSONBody
 
-from gateway.controllers.common import IdPath, outcome_response, parse_version, record_response
-from gateway.controllers.problems import ONE, problems
+from base.web.paths import IdPath
+from base.web.problems import ONE, problems
+from base.web.site import AuthedRequest
+from gateway.controllers.common import outcome_response, parse_version, record_response
 from gateway.controllers.records import UPDATE, WITHDRAW, IfMatch, Reason
-from gateway.dependencies import AuthedRequest, ServicesDep
+from gateway.dependencies import ServicesDep
 from schemas.burn_chart import BurnChart
 from schemas.errors import Conflict, InvalidInput, VersionMismatch
 from schemas.record_parts import Intake, Mechanism, PrimarySurvey, Resuscitation, SecondarySurvey

@@ -8,9 +8,11 @@ from litestar import Controller, Response, delete, get, post, put
 from litestar.openapi import ResponseSpec
 from litestar.params import FromQuery, HeaderParameter, JSONBody, QueryParameter
 
-from gateway.controllers.common import IdPath, outcome_response, parse_version, record_response
-from gateway.controllers.problems import BODY, ONE, SESSION, problems
-from gateway.dependencies import AuthedRequest, ServicesDep
+from base.web.paths import IdPath
+from base.web.problems import BODY, ONE, SESSION, problems
+from base.web.site import AuthedRequest
+from gateway.controllers.common import outcome_response, parse_version, record_response
+from gateway.dependencies import ServicesDep
 from schemas.patient import Encounter, Patient
 from schemas.records import EncounterRecord, Record, RecordHistory, RecordKind
 

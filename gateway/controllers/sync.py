@@ -7,8 +7,9 @@ from typing import Annotated
 from litestar import Controller, get, post
 from litestar.params import JSONBody, QueryParameter
 
-from gateway.controllers.problems import BODY, SESSION, problems
-from gateway.dependencies import AuthedRequest, ServicesDep
+from base.web.problems import BODY, SESSION, problems
+from base.web.site import AuthedRequest
+from gateway.dependencies import ServicesDep
 from schemas.sync import ChangesPage, PushRequest, PushResponse
 
 

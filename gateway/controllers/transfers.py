@@ -5,9 +5,10 @@ from __future__ import annotations
 from litestar import Controller, Response, get, post
 from litestar.openapi import ResponseSpec
 
-from gateway.controllers.common import IdPath
-from gateway.controllers.problems import ONE, SESSION, problems
-from gateway.dependencies import AuthedRequest, ServicesDep
+from base.web.paths import IdPath
+from base.web.problems import ONE, SESSION, problems
+from base.web.site import AuthedRequest
+from gateway.dependencies import ServicesDep
 from schemas.records import Record
 from schemas.transfer import OutboxEntry, SyncStatus
 

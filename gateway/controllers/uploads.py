@@ -23,9 +23,10 @@ from litestar.enums import HttpMethod
 from litestar.exceptions import InternalServerException
 from litestar.params import HeaderParameter
 
-from gateway.controllers.common import IdPath
-from gateway.controllers.problems import ONE, problems
-from gateway.dependencies import AuthedRequest, ServicesDep
+from base.web.paths import IdPath
+from base.web.problems import ONE, problems
+from base.web.site import AuthedRequest
+from gateway.dependencies import ServicesDep
 from gateway.scheduler import run_frames_now
 from gateway.services.uploads import UploadState
 from schemas.capture import TUS_VERSION, AssetKind, UploadStatus

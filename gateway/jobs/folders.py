@@ -16,7 +16,7 @@ import re
 import shutil
 from pathlib import Path
 
-from gateway.storage.blobs import media_root
+from base.folders import analysis_dir, job_dir, matching_files, media_root, work_root
 from gateway.storage.database import Database
 from schemas.base import iso, utcnow
 from schemas.config import Config
@@ -42,29 +42,9 @@ SCRATCH = ("source", "masks", "analysis/images", "analysis/sfm/database.db", "an
 them), the feature database and the depth maps. The mesh and the painted burn stay for the healing track."""
 
 
-def work_root(config: Config) -> Path:
-    if config.jobs.work_dir:
-        return Path(config.jobs.work_dir)
-    return Path(config.gateway.database).resolve().parent / "burnedge-analyses"
-
-
-def job_dir(config: Config, job_id: str) -> Path:
-    return work_root(config) / job_id
-
-
-def analysis_dir(config: Config, job_id: str) -> Path:
-    return job_dir(config, job_id) / "analysis"
-
-
-def patient_dir(config: Config, patient_id: str) -> Path:
-    return work_root(config) / "patients" / patient_id
-
-
 def artifacts(config: Config, job_id: str, patterns: tuple[str, ...] = DELIVERABLES) -> list[str]:
     """The downloadable files of a job (or those matching `patterns`), relative to its analysis folder."""
-    folder = analysis_dir(config, job_id)
-    found = {str(p.relative_to(folder)) for pattern in patterns for p in folder.glob(pattern) if p.is_file()}
-    return sorted(found)
+    return matching_files(analysis_dir(config, job_id), patterns)
 
 
 def artifact_file(config: Config, job_id: str, name: str) -> Path:

@@ -20,17 +20,18 @@ from pathlib import Path
 
 import msgspec
 
+from base.folders import media_root
+from base.storage import audit
+from base.storage import records as store
+from base.storage.blobs import MediaStore
 from gateway.jobs import folders
 from gateway.jobs.capture_time import hours_since_injury
 from gateway.jobs.queue import Claim, JobQueue
 from gateway.jobs.timeline import update_track
-from gateway.storage import audit
-from gateway.storage import records as store
-from gateway.storage.blobs import MediaStore, media_root
 from gateway.storage.database import Database
 from processing.analysis.pipeline import Patient
 from processing.analysis.pipeline import run as analyze
-from processing.reconstruction.artifacts import write_json
+from processing.stages import write_json
 from schemas.analysis import AnalysisResult, AnalysisStatus
 from schemas.base import iso, utcnow
 from schemas.config import Config

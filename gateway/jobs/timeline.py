@@ -12,8 +12,8 @@ from pathlib import Path
 
 import msgspec
 
+from base.storage import records as store
 from gateway.jobs import folders
-from gateway.storage import records as store
 from gateway.storage.database import Database
 from schemas.config import Config
 from schemas.errors import NotFound

@@ -13,16 +13,16 @@ import cv2
 import msgspec
 import numpy as np
 
+from base.accounts.permissions import Principal, require_capture, require_read
+from base.storage import audit
+from base.storage import records as store
 from gateway.jobs import folders, timeline
 from gateway.jobs.capture_time import capture_time
 from gateway.jobs.queue import JobQueue
 from gateway.services.assets import AssetService
-from gateway.services.permissions import Principal, require_capture, require_read
 from gateway.services.validation import require_live_encounter
-from gateway.storage import audit
-from gateway.storage import records as store
 from gateway.storage.database import Database
-from processing.reconstruction.artifacts import code_digest
+from processing.stages import code_digest
 from schemas.analysis import AnalysisResult
 from schemas.base import iso, utcnow
 from schemas.capture import Asset, AssetKind, MediaType

@@ -6,9 +6,9 @@ import sqlite3
 
 import msgspec
 
-from gateway.services.permissions import Principal
-from gateway.storage import audit
-from gateway.storage import records as store
+from base.accounts.permissions import Principal
+from base.storage import audit
+from base.storage import records as store
 from processing.clinical.assessment import assess
 from schemas.base import iso, utcnow
 from schemas.clinical_results import InputRef

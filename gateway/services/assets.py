@@ -11,12 +11,12 @@ from pathlib import Path
 
 import msgspec
 
-from gateway.services.permissions import Principal, require_read
+from base.accounts.permissions import Principal, require_read
+from base.storage import audit
+from base.storage.blobs import MediaStore, sha256_of
+from base.storage.records import get_head
 from gateway.services.validation import require_live_encounter
-from gateway.storage import audit
-from gateway.storage.blobs import MediaStore, sha256_of
 from gateway.storage.database import Database
-from gateway.storage.records import get_head
 from processing.capture.media import check_photo, check_video, sniff
 from processing.capture.quality import gate_bytes
 from processing.capture.readiness import View

@@ -1,21 +1,16 @@
-"""Reading and verifying the audit trail (administrators only)."""
+"""Verifying the gateway's audit trail, against the burn center's newest signed anchor where it has one."""
 
 from __future__ import annotations
 
-from gateway.services.permissions import Principal, require_admin
-from gateway.storage import audit
+from base.accounts.permissions import Principal, require_admin
+from base.storage import audit
 from gateway.storage.database import Database
-from schemas.audit import AuditEntry, AuditVerification
+from schemas.audit import AuditVerification
 from schemas.config import Config
 from schemas.errors import BurnedgeError, InvalidInput
 from schemas.transfer import SiteIdentity
 from sync import peers
 from sync.anchor import anchor_path, load_anchor
-
-
-def list_entries(db: Database, principal: Principal, after: int, limit: int) -> list[AuditEntry]:
-    require_admin(principal, "read_audit")
-    return list(audit.entries(db.connection(), after_seq=after, limit=limit))
 
 
 def verify(db: Database, principal: Principal | None, config: Config) -> AuditVerification:

@@ -16,8 +16,8 @@ import sqlite3
 
 import msgspec
 
+from base.accounts.permissions import Principal
 from gateway.services.assets import AssetService, insert_asset_row
-from gateway.services.permissions import Principal
 from gateway.services.validation import require_live_encounter
 from gateway.storage.database import Database
 from processing.capture.frames import ExtractedFrame, extract

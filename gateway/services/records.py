@@ -11,9 +11,7 @@ import sqlite3
 
 import msgspec
 
-from gateway.services import validation
-from gateway.services.assessments import refresh_assessments
-from gateway.services.permissions import (
+from base.accounts.permissions import (
     Principal,
     check_field_rules,
     readable_kinds,
@@ -21,8 +19,10 @@ from gateway.services.permissions import (
     require_read,
     require_write,
 )
-from gateway.storage import audit
-from gateway.storage import records as store
+from base.storage import audit
+from base.storage import records as store
+from gateway.services import validation
+from gateway.services.assessments import refresh_assessments
 from gateway.storage.database import Database
 from schemas.base import iso
 from schemas.config import Config

@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-from gateway.services.permissions import Principal, require_read
-from gateway.storage import records as store
+from base.accounts.permissions import Principal, require_read
+from base.storage import records as store
 from gateway.storage.database import Database
 from schemas.accounts import Role
 from schemas.config import Config

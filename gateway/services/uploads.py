@@ -20,10 +20,10 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
+from base.accounts.permissions import Principal, require_capture
+from base.storage.blobs import MediaStore
 from gateway.services.assets import AssetService
-from gateway.services.permissions import Principal, require_capture
 from gateway.services.validation import require_live_encounter
-from gateway.storage.blobs import MediaStore
 from gateway.storage.database import Database
 from schemas.accounts import Role
 from schemas.base import iso, utcnow

@@ -8,7 +8,7 @@ import sqlite3
 
 import msgspec
 
-from gateway.storage import records as store
+from base.storage import records as store
 from processing.clinical.fluids import validate_resuscitation
 from processing.clinical.lund_browder import validate_chart
 from schemas.base import utcnow

@@ -25,8 +25,8 @@ from processing.analysis.burn_region import (
     triangle_areas,
 )
 from processing.analysis.relief import UNCERTAIN_REFERENCE_MM, fit_reference, outward_at_burn, relief
-from processing.reconstruction.artifacts import write_json
 from processing.reconstruction.views import View
+from processing.stages import write_json
 from schemas.analysis import BurnMetrics, ReferenceRecord
 from schemas.base import Frozen
 from schemas.config import AnalysisConfig

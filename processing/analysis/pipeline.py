@@ -24,9 +24,9 @@ import numpy as np
 from processing.analysis import confidence, measure, segment_views, surface_map
 from processing.clinical.bsa import mosteller
 from processing.reconstruction import pipeline as reconstruction
-from processing.reconstruction.artifacts import Stages, read_json, write_json
 from processing.reconstruction.dense import DenseInfo
 from processing.segmentation.infer import SHIPPED_MODEL
+from processing.stages import Stages, read_json, write_json
 from schemas.analysis import AnalysisResult, AnalysisStatus, ScaleSummary, SegmentationRecord
 from schemas.config import Config
 from schemas.errors import CaptureInsufficient, InvalidInput

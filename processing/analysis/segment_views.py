@@ -16,9 +16,9 @@ import cv2
 import msgspec
 import numpy as np
 
-from processing.reconstruction.artifacts import fresh_dir, publish_dir, write_json
 from processing.reconstruction.views import read_rgb
 from processing.segmentation.infer import Box, BurnSegmenter
+from processing.stages import fresh_dir, publish_dir, write_json
 from schemas.analysis import SegmentationRecord, ViewMask
 from schemas.config import AnalysisConfig
 from schemas.errors import InvalidInput

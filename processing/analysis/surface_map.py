@@ -23,11 +23,11 @@ from scipy.sparse.csgraph import connected_components
 from processing.analysis import fusion, segment_views
 from processing.analysis.burn_region import mesh_edges, triangle_areas
 from processing.analysis.projection import sample_views
-from processing.reconstruction.artifacts import read_json
 from processing.reconstruction.dense import to_output_frame
 from processing.reconstruction.mesh import write_glb
 from processing.reconstruction.views import View, load_views, read_model
 from processing.segmentation.infer import Box
+from processing.stages import read_json
 from schemas.analysis import SegmentationRecord, ViewMask
 from schemas.config import AnalysisConfig
 from schemas.errors import CaptureInsufficient, InvalidInput

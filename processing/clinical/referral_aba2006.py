@@ -6,7 +6,7 @@ of Burn Centers (2006), burn center referral criteria. Any criterion met means r
 
 from __future__ import annotations
 
-from processing.clinical.referral import (
+from processing.clinical.referral_rules import (
     GUIDELINE,
     NO_INTAKE,
     NOT_SUPERFICIAL,

@@ -25,7 +25,7 @@ stays on the older list only (referral_aba2006).
 
 from __future__ import annotations
 
-from processing.clinical.referral import (
+from processing.clinical.referral_rules import (
     CONSULT,
     DEEP,
     DEEP_PARTIAL,

@@ -21,7 +21,7 @@ import msgspec
 import numpy as np
 
 from processing.longitudinal import healing, registration
-from processing.reconstruction.artifacts import write_json
+from processing.stages import write_json
 from schemas.analysis import AnalysisResult, AnalysisStatus
 from schemas.config import TrackingConfig
 from schemas.errors import InvalidInput

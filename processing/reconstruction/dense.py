@@ -12,9 +12,9 @@ import numpy as np
 import open3d as o3d
 
 from processing.reconstruction import fusion, stereo
-from processing.reconstruction.artifacts import read_json, write_json
 from processing.reconstruction.roi import Region, aim_point, region_of_interest
 from processing.reconstruction.views import View, load_views, read_colour, read_gray, read_model
+from processing.stages import read_json, write_json
 from schemas.config import ReconstructionConfig
 from schemas.errors import CaptureInsufficient
 from schemas.reconstruction import FailureCode, ScaleResult

@@ -24,10 +24,10 @@ import numpy as np
 import open3d as o3d
 from scipy.spatial import cKDTree
 
-from processing.reconstruction.artifacts import read_json
 from processing.reconstruction.dense import to_output_frame
 from processing.reconstruction.pipeline import paths
 from processing.reconstruction.views import load_views, read_model
+from processing.stages import read_json
 from schemas.reconstruction import ScaleResult
 
 

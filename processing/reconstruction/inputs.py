@@ -13,7 +13,7 @@ from pathlib import Path
 
 from processing.capture.frames import extract
 from processing.capture.quality import gate_file
-from processing.reconstruction.artifacts import fresh_dir, publish_dir, write_json
+from processing.stages import fresh_dir, publish_dir, write_json
 from schemas.config import Config
 from schemas.errors import CaptureInsufficient, NotFound
 from schemas.reconstruction import FailureCode, InputSet, SkippedPicture

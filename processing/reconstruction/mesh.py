@@ -10,9 +10,9 @@ import numpy as np
 import open3d as o3d
 import trimesh
 
-from processing.reconstruction.artifacts import read_json, write_json
 from processing.reconstruction.dense import INFO, DenseInfo
 from processing.reconstruction.roi import Region
+from processing.stages import read_json, write_json
 from schemas.config import ReconstructionConfig
 from schemas.errors import CaptureInsufficient
 from schemas.reconstruction import DenseQuality, FailureCode

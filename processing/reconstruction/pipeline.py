@@ -24,7 +24,7 @@ from pathlib import Path
 import msgspec
 
 from processing.reconstruction import dense, inputs, mesh, scale, sfm
-from processing.reconstruction.artifacts import Stages, code_digest, read_json, write_json
+from processing.stages import Stages, code_digest, read_json, write_json
 from schemas.config import Config
 from schemas.errors import CaptureInsufficient, NotFound
 from schemas.reconstruction import (

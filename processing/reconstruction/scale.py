@@ -9,10 +9,10 @@ from pathlib import Path
 import numpy as np
 
 from processing.capture.marker import find_markers
-from processing.reconstruction.artifacts import write_json
 from processing.reconstruction.marker_edges import linear_intensity, refine_quad
 from processing.reconstruction.triangulate import triangulate
 from processing.reconstruction.views import View, load_views, read_gray, read_model
+from processing.stages import write_json
 from schemas.config import ReconstructionConfig
 from schemas.errors import CaptureInsufficient
 from schemas.reconstruction import FailureCode, RulerPoints, ScaleEstimate, ScaleResult, ScaleSource

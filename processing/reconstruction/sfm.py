@@ -10,8 +10,8 @@ import msgspec
 import numpy as np
 import pycolmap
 
-from processing.reconstruction.artifacts import fresh_dir, publish_dir, write_json
 from processing.reconstruction.sfm_checks import check_model, pair_graph, quality_record
+from processing.stages import fresh_dir, publish_dir, write_json
 from schemas.config import ReconstructionConfig
 from schemas.errors import CaptureInsufficient
 from schemas.reconstruction import FailureCode, SfmQuality

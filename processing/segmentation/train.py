@@ -21,10 +21,10 @@ import numpy as np
 import torch
 from torch.nn import functional as F
 
-from processing.reconstruction.artifacts import write_json
 from processing.segmentation import datasets
 from processing.segmentation.network import BurnUNet, Probability
 from processing.segmentation.scores import split_scores
+from processing.stages import write_json
 from schemas.errors import InvalidInput
 from schemas.segmentation import TrainingConfig, TrainingReport
 

@@ -1,0 +1,1 @@
+"""Accounts, sessions, paired devices, permissions and login throttling, as both servers use them."""

@@ -1,0 +1,1 @@
+"""HTTP plumbing both servers mount: authentication, problem+json errors, health, login and admin controllers."""

@@ -1,0 +1,116 @@
+"""Schema of the center's SQLite file: consultants' accounts and the audit trail (as at a gateway), enrolled
+clinics, transfers in progress, stored bundles, notes on their way back and rejections."""
+
+from __future__ import annotations
+
+from sqlite_utils import Database, Migrations
+
+from base.storage import schema
+from sync.peers import PEERS_DDL
+
+central_migrations = Migrations("burnedge-central")
+
+
+@central_migrations()
+def c001_center(db: Database) -> None:
+    schema.create_accounts(db)
+    schema.create_audit_log(db)
+    db.execute(PEERS_DDL)
+    db.execute(
+        """
+        CREATE TABLE incoming (
+            site_id TEXT NOT NULL,
+            bundle_id TEXT NOT NULL,
+            envelope BLOB NOT NULL,
+            manifest_sha256 TEXT NOT NULL,
+            encounter_id TEXT NOT NULL,
+            version INTEGER NOT NULL,
+            chunks INTEGER NOT NULL,
+            announced_at TEXT NOT NULL,
+            PRIMARY KEY (site_id, bundle_id)
+        )"""
+    )
+    db.execute(
+        """
+        CREATE TABLE bundles (
+            site_id TEXT NOT NULL,
+            bundle_id TEXT NOT NULL,
+            encounter_id TEXT NOT NULL,
+            patient_id TEXT NOT NULL,
+            version INTEGER NOT NULL,
+            supersedes TEXT,
+            urgency TEXT NOT NULL,
+            urgency_rank INTEGER NOT NULL,
+            summary TEXT NOT NULL,
+            manifest TEXT NOT NULL,
+            manifest_sha256 TEXT NOT NULL,
+            stored_at TEXT NOT NULL,
+            receipt BLOB NOT NULL,
+            PRIMARY KEY (site_id, bundle_id),
+            UNIQUE (site_id, encounter_id, version)
+        )"""
+    )
+    db.execute(
+        """
+        CREATE TABLE bundle_parts (
+            site_id TEXT NOT NULL,
+            bundle_id TEXT NOT NULL,
+            name TEXT NOT NULL,
+            media_type TEXT NOT NULL,
+            sha256 TEXT NOT NULL,
+            size INTEGER NOT NULL,
+            PRIMARY KEY (site_id, bundle_id, name)
+        )"""
+    )
+    db.execute(
+        """
+        CREATE TABLE notes (
+            seq INTEGER PRIMARY KEY AUTOINCREMENT,
+            note_id TEXT NOT NULL UNIQUE,
+            site_id TEXT NOT NULL,
+            encounter_id TEXT NOT NULL,
+            bundle_id TEXT NOT NULL,
+            consultant_user_id TEXT NOT NULL,
+            note TEXT NOT NULL,
+            message BLOB,
+            written_at TEXT NOT NULL,
+            delivered_at TEXT
+        )"""
+    )
+    db.execute("CREATE INDEX notes_site ON notes (site_id, seq)")
+    db.execute("CREATE TABLE mail_cursors (site_id TEXT PRIMARY KEY, acked_seq INTEGER NOT NULL, last_poll_at TEXT)")
+    db.execute(
+        """
+        CREATE TABLE rejections (
+            id INTEGER PRIMARY KEY,
+            at TEXT NOT NULL,
+            site_id TEXT,
+            code TEXT NOT NULL,
+            reason TEXT NOT NULL,
+            key TEXT NOT NULL
+        )"""
+    )
+
+
+@central_migrations()
+def c002_audit_anchors(db: Database) -> None:
+    """Every audit-chain head a clinic had anchored: a later head must still run through the newest one that is
+    not voided (a site restored from a backup has its anchors voided by the center's IT person, audited)."""
+    db.execute(
+        """
+        CREATE TABLE audit_anchors (
+            id INTEGER PRIMARY KEY,
+            site_id TEXT NOT NULL,
+            seq INTEGER NOT NULL,
+            hash TEXT NOT NULL,
+            anchored_at TEXT NOT NULL,
+            voided_at TEXT
+        )"""
+    )
+    db.execute("CREATE INDEX audit_anchors_site ON audit_anchors (site_id, seq)")
+
+
+@central_migrations()
+def c003_must_change_password(db: Database) -> None:
+    """Consultants' accounts share the gateway's account code: an administrator's reset forces a change."""
+    schema.add_must_change_password(db)

@@ -1,0 +1,147 @@
+"""The import graph runs one way: schemas -> base -> processing, sync -> gateway, center -> the command line on top.
+
+An AST walk over every module (imports inside functions included) finds each import of a project module; a module
+may import its own layer or those below, never one above, never a sibling server, and no circle of modules may
+form. A second test loads the burn center's app in a fresh interpreter and checks it pulls in no gateway code and no
+OpenCV.
+"""
+
+from __future__ import annotations
+
+import ast
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from tests.conftest import REPO
+
+LAYERS = {"schemas": 0, "base": 1, "processing": 2, "sync": 2, "gateway": 3, "center": 3, "burnedge": 4}
+"""Each top-level package's layer; a module imports only from its own package or from a lower layer."""
+ALLOWED_ACROSS = {("sync", "processing")}
+"""sync stands on processing where a case bundle needs the science's artifacts."""
+
+
+def project_modules() -> dict[str, Path]:
+    modules = {}
+    for package in LAYERS:
+        for path in (REPO / package).rglob("*.py"):
+            name = ".".join(path.relative_to(REPO).with_suffix("").parts)
+            modules[name.removesuffix(".__init__")] = path
+    return modules
+
+
+def imported(module: str, path: Path, modules: dict[str, Path]) -> set[str]:
+    """The project modules `module` imports anywhere in its body."""
+    found = set()
+    for node in ast.walk(ast.parse(path.read_text(), str(path))):
+        if isinstance(node, ast.Import):
+            names = [alias.name for alias in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                parts = module.split(".")
+                keep = len(parts) - node.level + (1 if path.name == "__init__.py" else 0)
+                prefix = ".".join(parts[:keep] + ([node.module] if node.module else []))
+            else:
+                prefix = node.module or ""
+            names = [f"{prefix}.{alias.name}" for alias in node.names] + [prefix]
+        else:
+            continue
+        for name in names:
+            while name and name not in modules:
+                name = name.rpartition(".")[0]
+            if name and name != module:
+                found.add(name)
+    return found
+
+
+def import_graph() -> dict[str, set[str]]:
+    modules = project_modules()
+    return {name: imported(name, path, modules) for name, path in modules.items()}
+
+
+def layer(module: str) -> tuple[str, int]:
+    package = module.split(".")[0]
+    return package, LAYERS[package]
+
+
+def upward_imports(graph: dict[str, set[str]]) -> list[str]:
+    wrong = []
+    for source, targets in graph.items():
+        (src_pkg, src_layer) = layer(source)
+        for target in targets:
+            (dst_pkg, dst_layer) = layer(target)
+            if src_pkg == dst_pkg or (src_pkg, dst_pkg) in ALLOWED_ACROSS:
+                continue
+            if dst_layer >= src_layer:
+                wrong.append(f"{source} imports {target} ({dst_pkg} is not below {src_pkg})")
+    return sorted(wrong)
+
+
+def module_circles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """Strongly connected components of more than one module (Tarjan's algorithm, iterative)."""
+    index, low, stack, on_stack, circles, counter = {}, {}, [], set(), [], 0
+    for root in graph:
+        if root in index:
+            continue
+        work = [(root, iter(sorted(graph[root])))]
+        index[root] = low[root] = counter
+        counter += 1
+        stack.append(root)
+        on_stack.add(root)
+        while work:
+            node, children = work[-1]
+            child = next(children, None)
+            if child is not None:
+                if child not in index:
+                    index[child] = low[child] = counter
+                    counter += 1
+                    stack.append(child)
+                    on_stack.add(child)
+                    work.append((child, iter(sorted(graph[child]))))
+                elif child in on_stack:
+                    low[node] = min(low[node], index[child])
+                continue
+            work.pop()
+            if work:
+                low[work[-1][0]] = min(low[work[-1][0]], low[node])
+            if low[node] == index[node]:
+                component = []
+                while True:
+                    member = stack.pop()
+                    on_stack.discard(member)
+                    component.append(member)
+                    if member == node:
+                        break
+                if len(component) > 1:
+                    circles.append(sorted(component))
+    return circles
+
+
+def test_no_module_imports_from_a_layer_above_its_own():
+    assert upward_imports(import_graph()) == []
+
+
+def test_no_circle_of_modules_remains():
+    assert module_circles(import_graph()) == []
+
+
+def test_the_checks_see_an_upward_import_and_a_circle():
+    graph = {"base.a": {"gateway.b"}, "gateway.b": {"base.a"}, "sync.c": {"processing.d"}, "processing.d": set()}
+    assert upward_imports(graph) == ["base.a imports gateway.b (gateway is not below base)"]
+    assert module_circles(graph) == [["base.a", "gateway.b"]]
+    assert upward_imports({"processing.d": {"sync.c"}, "sync.c": set()}) != []
+    assert upward_imports({"center.x": {"gateway.y"}, "gateway.y": set()}) != []
+
+
+@pytest.mark.parametrize("module", ["center.app", "sync.sender", "base.web.account_controllers"])
+def test_the_center_and_the_shared_layers_load_no_gateway_code_and_no_opencv(module: str):
+    probe = f"import json, sys, {module}; print(json.dumps(sorted(sys.modules)))"
+    loaded = json.loads(
+        subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, cwd=REPO, check=True).stdout
+    )
+    assert module in loaded, "the probe did not load the module it checks"
+    assert [m for m in loaded if m == "gateway" or m.startswith("gateway.")] == []
+    assert "cv2" not in loaded
