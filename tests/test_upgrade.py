@@ -123,9 +123,21 @@ def served_head(client: TestClient, headers: dict, head: dict) -> dict:
 
 def test_a_gateway_made_before_sync_is_migrated_with_every_record_file_and_audit_entry(tmp_path: Path):
     db_path, before = upgraded(tmp_path, "gateway", "gateway.sqlite3", migrations, ["burnedge-media"])
-    versions, heads, assets = rows(before, "record_versions"), rows(before, "record_heads"), rows(before, "assets")
     old_migrations = {r["name"] for r in rows(before, "_sqlite_migrations")}
     assert "m006_analysis_jobs" in old_migrations and "m007_sync" not in old_migrations, "made before m007_sync"
+    check_gateway_serves(db_path, before, "gateway")
+
+
+def test_a_gateway_made_by_the_main_before_the_layers_migrates_and_serves_as_before(tmp_path: Path):
+    """Made by commit 4bb4a92, the last before the shared base and center/ (issue 17): the schema is at m009."""
+    db_path, before = upgraded(tmp_path, "gateway-4bb4a92", "gateway.sqlite3", migrations, ["burnedge-media"])
+    assert "m009_capture_time_and_attempts" in {r["name"] for r in rows(before, "_sqlite_migrations")}
+    check_gateway_serves(db_path, before, "gateway-4bb4a92")
+
+
+def check_gateway_serves(db_path: Path, before: Snapshot, name: str) -> None:
+    """The migrated gateway serves every record version, file, job and audit entry the fixture held."""
+    versions, heads, assets = rows(before, "record_versions"), rows(before, "record_heads"), rows(before, "assets")
     assert any(v["version"] > 1 and not v["deleted"] for v in versions), "the fixture should hold an amendment"
     assert any(v["deleted"] for v in versions), "the fixture should hold a withdrawn record"
     assert assets and rows(before, "analysis_jobs") and rows(before, "devices")
@@ -197,12 +209,26 @@ def test_a_gateway_made_before_sync_is_migrated_with_every_record_file_and_audit
         assert [(e["seq"], e["hash"]) for e in audit[: len(old_chain)]] == [(e["seq"], e["hash"]) for e in old_chain]
         assert len(audit) > len(old_chain) and audit[len(old_chain)]["prev_hash"] == old_chain[-1]["hash"]
         assert client.get("/api/v1/admin/audit/verify", headers=admin).json()["ok"]
-    assert file_hashes(db_path.parent / "burnedge-media") == file_hashes(FIXTURES / "gateway" / "burnedge-media")
+    assert file_hashes(db_path.parent / "burnedge-media") == file_hashes(FIXTURES / name / "burnedge-media")
+
+
+CENTER_STORES = ["burnedge-central-store", "burnedge-central-keys"]
 
 
 def test_a_center_made_by_an_older_schema_is_migrated_and_still_serves_its_cases(tmp_path: Path):
-    stores = ["burnedge-central-store", "burnedge-central-keys"]
-    db_path, before = upgraded(tmp_path, "center", "center.sqlite3", central_migrations, stores)
+    db_path, before = upgraded(tmp_path, "center", "center.sqlite3", central_migrations, CENTER_STORES)
+    check_center_serves(db_path, before)
+
+
+def test_a_center_made_by_the_main_before_the_layers_migrates_and_serves_as_before(tmp_path: Path):
+    """Made by commit 4bb4a92, the last before center/ moved out of sync/central (issue 17): schema at c003."""
+    db_path, before = upgraded(tmp_path, "center-4bb4a92", "center.sqlite3", central_migrations, CENTER_STORES)
+    assert "c003_must_change_password" in {r["name"] for r in rows(before, "_sqlite_migrations")}
+    check_center_serves(db_path, before)
+
+
+def check_center_serves(db_path: Path, before: Snapshot) -> None:
+    """The migrated center lists and serves every case, part, note, rejection and site the fixture held."""
     bundles, parts, notes = rows(before, "bundles"), rows(before, "bundle_parts"), rows(before, "notes")
     assert len(bundles) == 2 and parts and notes and rows(before, "rejections") and rows(before, "peers")
 
@@ -240,7 +266,7 @@ def test_a_center_made_by_an_older_schema_is_migrated_and_still_serves_its_cases
         db.close()
 
 
-@pytest.mark.parametrize("name", ["gateway", "center"])
+@pytest.mark.parametrize("name", ["gateway", "center", "gateway-4bb4a92", "center-4bb4a92"])
 def test_the_fixtures_are_small_and_self_contained(name: str):
     folder = FIXTURES / name
     files = [p for p in folder.rglob("*") if p.is_file() and not p.name.endswith(("-wal", "-shm"))]
