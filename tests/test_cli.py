@@ -195,3 +195,9 @@ def test_global_options_work_before_and_after_the_command(tmp_path):
         ["--config", str(config), "users", "add", "--username", "amani", "--role", "nurse", "-v"]
     )
     assert (parsed.config, parsed.db, parsed.verbose) == (str(config), None, True)
+
+
+def test_ci_runs_the_readmes_test_command_with_the_linter_and_the_formatter_check():
+    ci = (REPO / ".ci" / "run").read_text().strip().splitlines()[-1]
+    assert f"```sh\n{ci}\n```" in (REPO / "README.md").read_text(), "the README's test command is what CI runs"
+    assert "ruff check ." in ci and "ruff format --check ." in ci and "pytest" in ci

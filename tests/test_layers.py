@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import ast
 import json
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -145,3 +146,56 @@ def test_the_center_and_the_shared_layers_load_no_gateway_code_and_no_opencv(mod
     assert module in loaded, "the probe did not load the module it checks"
     assert [m for m in loaded if m == "gateway" or m.startswith("gateway.")] == []
     assert "cv2" not in loaded
+
+
+SQL_KEYWORD = re.compile(r"^\s*(SELECT|INSERT|UPDATE|DELETE|CREATE|DROP|ALTER|WITH|PRAGMA|REPLACE|VACUUM)\b")
+SQL_CLAUSE = re.compile(r"\b(FROM|INTO|SET|TABLE|INDEX|VALUES|PRAGMA|VACUUM)\b")
+FOREIGN_DATABASES = {
+    "processing.reconstruction.colmap_database": "COLMAP's own feature database, read-only",
+}
+"""Modules that read a database burnedge does not own, so it has no storage module of burnedge's."""
+
+
+def is_storage_module(module: str) -> bool:
+    return "storage" in module.split(".") or module in FOREIGN_DATABASES
+
+
+def sql_outside_storage(modules: dict[str, Path] | None = None) -> list[str]:
+    """Each SQL statement (a string that reads as one) or `.execute` call outside a storage module, as
+    "module:line"."""
+    found = []
+    for module, path in (modules or project_modules()).items():
+        if is_storage_module(module):
+            continue
+        for node in ast.walk(ast.parse(path.read_text(), str(path))):
+            text = None
+            if isinstance(node, ast.Constant) and isinstance(node.value, str):
+                text = node.value
+            elif isinstance(node, ast.JoinedStr) and node.values and isinstance(node.values[0], ast.Constant):
+                text = str(node.values[0].value)
+            is_sql = text is not None and SQL_KEYWORD.match(text) and SQL_CLAUSE.search(text)
+            is_call = (
+                isinstance(node, ast.Call)
+                and isinstance(node.func, ast.Attribute)
+                and node.func.attr in ("execute", "executemany", "executescript")
+            )
+            if is_sql or is_call:
+                found.append(f"{module}:{node.lineno}")
+    return sorted(set(found))
+
+
+def rows_outside_storage(modules: dict[str, Path] | None = None) -> list[str]:
+    """Modules outside storage that name sqlite3.Row: untyped rows must not travel past the storage layer."""
+    return sorted(
+        module
+        for module, path in (modules or project_modules()).items()
+        if not is_storage_module(module) and "sqlite3.Row" in path.read_text()
+    )
+
+
+def test_sql_lives_only_in_storage_modules():
+    assert sql_outside_storage() == []
+
+
+def test_no_untyped_row_travels_past_the_storage_modules():
+    assert rows_outside_storage() == []

@@ -16,13 +16,27 @@ import re
 import shutil
 from pathlib import Path
 
-from base.folders import analysis_dir, job_dir, matching_files, media_root, work_root
+from base.folders import analysis_dir, job_dir, matching_files, media_root, patient_dir, work_root
 from gateway.storage.database import Database
 from schemas.base import iso, utcnow
 from schemas.config import Config
 from schemas.errors import NotFound
 
 log = logging.getLogger("burnedge.jobs")
+
+# The folders of a job and of a patient are resolved in base/folders.py, with every other default folder.
+__all__ = [
+    "DELIVERABLES",
+    "SCRATCH",
+    "analysis_dir",
+    "artifact_file",
+    "artifacts",
+    "clean_up",
+    "job_dir",
+    "patient_dir",
+    "without_server_paths",
+    "work_root",
+]
 
 DELIVERABLES = (
     "analysis.json",
