@@ -24,8 +24,9 @@ from pathlib import Path
 
 from benchmarks.http_load import request, run_load
 from burnedge.demo_client import GatewayClient
-from tests.conftest import FAST_HASH_ENV, GatewayProcess, add_user_cli, encounter_body, free_port, login
-from tests.conftest import patient_body as patient
+from harness.bodies import encounter_body
+from harness.bodies import patient_body as patient
+from harness.processes import FAST_HASH_ENV, GatewayProcess, add_user_cli, free_port, login
 
 REPO = Path(__file__).resolve().parents[1]
 SHARED_SET = REPO.parent / "shared" / "phantoms" / "p3_thigh"

@@ -29,17 +29,18 @@ import threading
 import time
 from pathlib import Path
 
+import msgspec
 import zenoh
 
 from base.folders import keys_dir
 from gateway.storage.database import Database
+from harness.processes import FAST_HASH_ENV, free_port
+from harness.sites import Sites, record_case
 from schemas.config import load_config
 from sync.keys import load_keys
 from sync.outbox import Outbox
 from sync.sender import Sender
 from sync.zenoh_link import _no_discovery_no_shm, _set
-from tests.conftest import FAST_HASH_ENV, free_port
-from tests.sync_sites import Sites, record_case
 
 PHOTO_SIZE = (1500, 1120)  # ~1.3 MB of JPEG each
 PHOTO_MB = 1.3
@@ -170,36 +171,36 @@ def loopback(work: Path, mb: float, repeat: int, chunk_kib: int, window: int) ->
 def slow_link(work: Path) -> dict:
     import sqlite3
 
-    from tests.test_sync_poor_link import RATE_KBIT, outbox_row, poor_link, record_and_queue
+    from harness.poor_link_sites import RATE_KBIT, outbox_entry, poor_link, record_and_queue
 
     with poor_link(work) as (sites, link, start_both):
         _, bundle_id, _ = record_and_queue(sites, work)
-        row = outbox_row(sites.gateway.db, bundle_id)
+        row = outbox_entry(sites.gateway.db, bundle_id)
         t0 = time.monotonic()
         procs = start_both()
         first_ack = None
-        while row["state"] != "delivered":
+        while row.state != "delivered":
             if any(p.poll() is not None for p in procs) or time.monotonic() - t0 > 900:
-                raise RuntimeError(f"not delivered: {dict(row)}")
-            if first_ack is None and row["sent_chunks"] > 0:
+                raise RuntimeError(f"not delivered: {msgspec.structs.asdict(row)}")
+            if first_ack is None and row.sent_chunks > 0:
                 first_ack = time.monotonic() - t0
             time.sleep(0.2)
-            row = outbox_row(sites.gateway.db, bundle_id)
+            row = outbox_entry(sites.gateway.db, bundle_id)
         took = time.monotonic() - t0
         kind = type(link).__name__
     with sqlite3.connect(sites.center.env["BURNEDGE_CENTRAL_DATABASE"]) as db:
         assert db.execute("SELECT COUNT(*) FROM bundles").fetchone()[0] == 1
-    ideal = row["bytes"] * 8 / (RATE_KBIT * 1000)
+    ideal = row.bytes * 8 / (RATE_KBIT * 1000)
     return {
         "link": kind,
         "rate_kbit": RATE_KBIT,
-        "bytes": row["bytes"],
-        "chunks": row["chunks"],
+        "bytes": row.bytes,
+        "chunks": row.chunks,
         "delivered_s": took,
         "first_progress_s": first_ack,
         "ideal_s": ideal,
         "ratio": took / ideal,
-        "attempts": row["attempts"],
+        "attempts": row.attempts,
     }
 
 

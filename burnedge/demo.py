@@ -13,6 +13,7 @@ from pathlib import Path
 import msgspec
 
 from base.accounts.permissions import Principal
+from base.storage import accounts as account_rows
 from gateway.dependencies import Services
 from gateway.storage.database import Database
 from schemas.accounts import Role, UserCreate
@@ -50,7 +51,7 @@ DEMO_USERS = {"admin": Role.admin, "clinician": Role.clinician, "nurse": Role.nu
 def seed_accounts(services: Services, credentials_file: Path) -> dict[str, str]:
     """Create the demo accounts once; their random passwords go to a file only its owner can read."""
     conn = services.db.connection()
-    if credentials_file.exists() and conn.execute("SELECT 1 FROM users WHERE username = 'clinician'").fetchone():
+    if credentials_file.exists() and account_rows.find_user_named(conn, "clinician") is not None:
         return dict(line.split(" ", 1) for line in credentials_file.read_text().split("\n") if line)
     passwords = {name: secrets.token_urlsafe(12) for name in DEMO_USERS}
     for name, role in DEMO_USERS.items():
@@ -67,9 +68,8 @@ def seed_accounts(services: Services, credentials_file: Path) -> dict[str, str]:
 def seed_patient(services: Services) -> None:
     """The demo patient: a small deep partial-thickness burn of the right forearm from a pan of hot oil, seen on
     the day and at 7, 14 and 21 days (the visits the series' photos belong to)."""
-    conn = services.db.connection()
-    row = conn.execute("SELECT id FROM users WHERE username = 'clinician'").fetchone()
-    who = Principal(row["id"], "clinician", Role.clinician, None, "demo-seed")
+    clinician = services.accounts.user_named("clinician")
+    who = Principal(clinician.id, "clinician", Role.clinician, None, "demo-seed")
     if services.records.list_records(who, RecordKind.patient, limit=1):
         return
     first = utcnow().replace(microsecond=0) - dt.timedelta(days=SERIES_DAYS[-1], hours=1)

@@ -16,8 +16,10 @@ import msgspec
 
 from base.storage import audit
 from base.storage.database import Database
+from center.storage import anchors
 from schemas.audit import AuditAnchor, AuditHead
 from schemas.base import iso, utcnow
+from schemas.central import StoredAnchor
 from schemas.errors import TransferRejected
 from schemas.transfer import AnchorReply, AnchorRequest, SignedEnvelope, SiteIdentity, SiteRole
 from sync import peers
@@ -43,31 +45,18 @@ class AnchorBook:
                 f"anchor request addressed to {request.center_id} from {request.site_id}", code="misaddressed"
             )
         with self.db.write() as conn:
-            last = self.latest(conn, site_id)
+            last = anchors.latest_anchor(conn, site_id)
             if last is not None:
-                seq, digest, when = last
-                if request.previous is None or request.previous.seq != seq:
-                    return AnchorReply(status="need", need_seq=seq)
-                _check_runs_through(site_id, request.head, request.previous, seq, digest, when)
-            if last is None or request.head.seq > last[0]:
-                conn.execute(
-                    "INSERT INTO audit_anchors (site_id, seq, hash, anchored_at) VALUES (?,?,?,?)",
-                    (site_id, request.head.seq, request.head.hash, iso(utcnow())),
-                )
-            seq, digest, when = self.latest(conn, site_id)
+                if request.previous is None or request.previous.seq != last.head.seq:
+                    return AnchorReply(status="need", need_seq=last.head.seq)
+                _check_runs_through(site_id, request.head, request.previous, last)
+            if last is None or request.head.seq > last.head.seq:
+                anchors.insert_anchor(conn, site_id, request.head, iso(utcnow()))
+            newest = anchors.latest_anchor(conn, site_id)
         anchor = AuditAnchor(
-            site_id=site_id, center_id=self.keys.site_id, head=AuditHead(seq=seq, hash=digest), anchored_at=when
+            site_id=site_id, center_id=self.keys.site_id, head=newest.head, anchored_at=newest.anchored_at
         )
         return AnchorReply(status="anchored", anchor=self.keys.sign("audit-anchor", anchor))
-
-    @staticmethod
-    def latest(conn, site_id: str) -> tuple[int, str, str] | None:
-        row = conn.execute(
-            "SELECT seq, hash, anchored_at FROM audit_anchors WHERE site_id = ? AND voided_at IS NULL"
-            " ORDER BY seq DESC, id DESC LIMIT 1",
-            (site_id,),
-        ).fetchone()
-        return (row["seq"], row["hash"], row["anchored_at"]) if row else None
 
 
 def accept_restore(db: Database, site_id: str, *, by: str, reason: str) -> dict:
@@ -75,10 +64,8 @@ def accept_restore(db: Database, site_id: str, *, by: str, reason: str) -> dict:
     anchors the restored chain afresh. Audited; the voided anchors stay in the table."""
     with db.write() as conn:
         peers.trusted(conn, site_id, SiteRole.clinic)
-        last = AnchorBook.latest(conn, site_id)
-        voided = conn.execute(
-            "UPDATE audit_anchors SET voided_at = ? WHERE site_id = ? AND voided_at IS NULL", (iso(utcnow()), site_id)
-        ).rowcount
+        last = anchors.latest_anchor(conn, site_id)
+        voided = anchors.void_anchors(conn, site_id, iso(utcnow()))
         audit.append(
             conn,
             action="peer.accept_restore",
@@ -86,24 +73,25 @@ def accept_restore(db: Database, site_id: str, *, by: str, reason: str) -> dict:
             device_id=None,
             kind="peer",
             record_id=site_id,
-            detail=f"by {by}: {reason}; {voided} anchors voided, last at entry {last[0] if last else '-'}",
+            detail=f"by {by}: {reason}; {voided} anchors voided, last at entry {last.head.seq if last else '-'}",
         )
     return {
         "site_id": site_id,
         "anchors_voided": voided,
-        "last_anchored_seq": last[0] if last else None,
+        "last_anchored_seq": last.head.seq if last else None,
         "next": "the site's next sync round anchors its restored audit chain",
     }
 
 
-def _check_runs_through(site_id: str, head: AuditHead, previous: AuditHead, seq: int, digest: str, when: str) -> None:
+def _check_runs_through(site_id: str, head: AuditHead, previous: AuditHead, last: StoredAnchor) -> None:
+    seq, when = last.head.seq, last.anchored_at
     if head.seq < seq:
         raise TransferRejected(
             f"{site_id}'s audit chain now ends at entry {head.seq}, but it had reached entry {seq} when this center "
             f"anchored it on {when}: entries were removed or its database was replaced by an older copy",
             code="audit-rollback",
         )
-    if previous.hash != digest:
+    if previous.hash != last.head.hash:
         raise TransferRejected(
             f"{site_id}'s audit entry {seq} is not the one this center anchored on {when}: its chain was rewritten",
             code="audit-rewritten",

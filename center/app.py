@@ -29,8 +29,8 @@ from base.web.site import AuthedRequest
 from center.cases import CaseService
 from center.endpoint import Endpoint
 from center.files import PartStore
-from center.migrations import central_migrations
 from center.receiver import Receiver
+from center.storage.migrations import central_migrations
 from schemas.accounts import Role
 from schemas.audit import AuditVerification
 from schemas.base import utcnow

@@ -5,30 +5,21 @@ from __future__ import annotations
 import sqlite3
 import uuid
 
-import msgspec
-
 from base.accounts.permissions import Principal
-from base.storage import audit
+from base.storage import accounts, audit
 from base.storage.database import Database
 from center.files import PartStore
+from center.storage import cases, notes, rejections
 from schemas.accounts import Role
 from schemas.base import iso, utcnow
 from schemas.central import CaseDetail, CaseItem, NoteRequest, NoteStatus, RejectionItem
 from schemas.errors import Forbidden, NotFound, TransferRejected
-from schemas.transfer import BundleManifest, CaseSummary, ConsultationNote, SiteIdentity, SiteRole, Urgency
+from schemas.transfer import ConsultationNote, SiteIdentity, SiteRole
 from sync import peers
 from sync.keys import SiteKeys
 from sync.mailbox import seal_note
 
 READERS = frozenset({Role.consultant, Role.clinician})
-_CASE_SQL = """
-    SELECT b.*, p.identity AS peer_identity,
-        (SELECT n.bundle_id FROM bundles n WHERE n.site_id = b.site_id AND n.encounter_id = b.encounter_id
-            AND n.version > b.version ORDER BY n.version DESC LIMIT 1) AS superseded_by,
-        (SELECT COUNT(*) FROM notes t WHERE t.site_id = b.site_id AND t.encounter_id = b.encounter_id) AS notes,
-        (SELECT COUNT(*) FROM notes t WHERE t.site_id = b.site_id AND t.encounter_id = b.encounter_id
-            AND t.written_at >= b.stored_at) AS notes_since
-    FROM bundles b JOIN peers p ON p.site_id = b.site_id"""
 
 
 class CaseService:
@@ -40,8 +31,7 @@ class CaseService:
     def list_cases(self, who: Principal, *, include_superseded: bool = False, limit: int = 200) -> list[CaseItem]:
         """Latest version of each case; awaiting advice first, then most urgent, then longest waiting."""
         _require(who, READERS)
-        rows = self.db.connection().execute(_CASE_SQL + " ORDER BY b.urgency_rank, b.stored_at").fetchall()
-        items = [_item(r) for r in rows]
+        items = cases.list_cases(self.db.connection())
         if not include_superseded:
             items = [i for i in items if i.superseded_by is None]
         items.sort(key=lambda i: (not i.awaiting_advice,))  # stable: urgency order kept within each group
@@ -50,57 +40,38 @@ class CaseService:
     def case(self, who: Principal, site_id: str, bundle_id: str) -> CaseDetail:
         _require(who, READERS)
         conn = self.db.connection()
-        row = conn.execute(_CASE_SQL + " WHERE b.site_id = ? AND b.bundle_id = ?", (site_id, bundle_id)).fetchone()
-        if row is None:
+        stored = cases.find_case(conn, site_id, bundle_id)
+        if stored is None:
             raise NotFound(f"no case {bundle_id} from {site_id}")
-        versions = conn.execute(
-            _CASE_SQL + " WHERE b.site_id = ? AND b.encounter_id = ? ORDER BY b.version DESC",
-            (site_id, row["encounter_id"]),
-        ).fetchall()
-        notes = conn.execute(
-            "SELECT note, delivered_at FROM notes WHERE site_id = ? AND encounter_id = ? ORDER BY seq",
-            (site_id, row["encounter_id"]),
-        ).fetchall()
+        encounter_id = stored.case.encounter_id
         return CaseDetail(
-            case=_item(row),
-            manifest=msgspec.json.decode(row["manifest"], type=BundleManifest),
-            versions=[_item(v) for v in versions],
-            notes=[
-                NoteStatus(note=msgspec.json.decode(n["note"], type=ConsultationNote), delivered_at=n["delivered_at"])
-                for n in notes
-            ],
+            case=stored.case,
+            manifest=stored.manifest,
+            versions=cases.case_versions(conn, site_id, encounter_id),
+            notes=notes.encounter_notes(conn, site_id, encounter_id),
         )
 
     def part(self, who: Principal, site_id: str, bundle_id: str, name: str) -> tuple[bytes, str]:
         _require(who, READERS)
-        row = (
-            self.db.connection()
-            .execute(
-                "SELECT sha256, media_type FROM bundle_parts WHERE site_id = ? AND bundle_id = ? AND name = ?",
-                (site_id, bundle_id, name),
-            )
-            .fetchone()
-        )
-        if row is None:
+        part = cases.find_part(self.db.connection(), site_id, bundle_id, name)
+        if part is None:
             raise NotFound(f"case {bundle_id} has no part {name!r}: its manifest lists the parts")
-        return self.parts.read(row["sha256"]), row["media_type"]
+        return self.parts.read(part.sha256), part.media_type
 
     def write_note(self, who: Principal, site_id: str, bundle_id: str, body: NoteRequest) -> NoteStatus:
         """Store a consultant's note and seal it for the clinic, which fetches it at its next round."""
         _require(who, frozenset({Role.consultant}))
         with self.db.write() as conn:
-            row = conn.execute(
-                "SELECT * FROM bundles WHERE site_id = ? AND bundle_id = ?", (site_id, bundle_id)
-            ).fetchone()
-            if row is None:
+            stored = cases.find_bundle(conn, site_id, bundle_id)
+            if stored is None:
                 raise NotFound(f"no case {bundle_id} from {site_id}")
             clinic = _clinic(conn, site_id)
             note = ConsultationNote(
                 note_id=str(uuid.uuid4()),
-                encounter_id=row["encounter_id"],
-                patient_id=row["patient_id"],
+                encounter_id=stored.encounter_id,
+                patient_id=stored.patient_id,
                 bundle_id=bundle_id,
-                bundle_version=row["version"],
+                bundle_version=stored.version,
                 center_id=self.keys.site_id,
                 consultant=_display(conn, who),
                 consultant_user_id=who.user_id,
@@ -108,21 +79,8 @@ class CaseService:
                 recommendation=body.recommendation,
                 advice=body.advice,
             )
-            cur = conn.execute(
-                "INSERT INTO notes (note_id, site_id, encounter_id, bundle_id, consultant_user_id, note,"
-                " written_at) VALUES (?,?,?,?,?,?,?)",
-                (
-                    note.note_id,
-                    site_id,
-                    note.encounter_id,
-                    bundle_id,
-                    who.user_id,
-                    msgspec.json.encode(note).decode(),
-                    note.written_at,
-                ),
-            )
-            message = seal_note(self.keys, clinic, cur.lastrowid, note)
-            conn.execute("UPDATE notes SET message = ? WHERE seq = ?", (msgspec.msgpack.encode(message), cur.lastrowid))
+            seq = notes.insert_note(conn, site_id, note)
+            notes.attach_sealed(conn, seq, seal_note(self.keys, clinic, seq, note))
             audit.append(
                 conn,
                 action="consultation.write",
@@ -131,17 +89,13 @@ class CaseService:
                 kind="consultation",
                 record_id=note.note_id,
                 detail=f"{note.recommendation.value} for encounter "
-                f"{note.encounter_id} at {site_id} (bundle {bundle_id} v{row['version']})",
+                f"{note.encounter_id} at {site_id} (bundle {bundle_id} v{stored.version})",
             )
         return NoteStatus(note=note, delivered_at=None)
 
     def rejections(self, who: Principal, limit: int = 100) -> list[RejectionItem]:
         _require(who, frozenset({Role.admin, Role.consultant}))
-        rows = self.db.connection().execute("SELECT * FROM rejections ORDER BY id DESC LIMIT ?", (limit,))
-        return [
-            RejectionItem(at=r["at"], site_id=r["site_id"], code=r["code"], reason=r["reason"], key=r["key"])
-            for r in rows
-        ]
+        return rejections.latest_rejections(self.db.connection(), limit)
 
 
 def _require(who: Principal, roles: frozenset[Role]) -> None:
@@ -157,23 +111,5 @@ def _clinic(conn: sqlite3.Connection, site_id: str) -> SiteIdentity:
 
 
 def _display(conn: sqlite3.Connection, who: Principal) -> str:
-    row = conn.execute("SELECT display_name FROM users WHERE id = ?", (who.user_id,)).fetchone()
-    return (row["display_name"] if row and row["display_name"] else who.username)[:200]
-
-
-def _item(row: sqlite3.Row) -> CaseItem:
-    identity = msgspec.json.decode(row["peer_identity"], type=SiteIdentity)
-    return CaseItem(
-        site_id=row["site_id"],
-        site_name=identity.name,
-        bundle_id=row["bundle_id"],
-        encounter_id=row["encounter_id"],
-        patient_id=row["patient_id"],
-        version=row["version"],
-        urgency=Urgency(row["urgency"]),
-        summary=msgspec.json.decode(row["summary"], type=CaseSummary),
-        stored_at=row["stored_at"],
-        superseded_by=row["superseded_by"],
-        notes=row["notes"],
-        awaiting_advice=row["notes_since"] == 0,
-    )
+    stored = accounts.find_user(conn, who.user_id)
+    return (stored.user.display_name if stored and stored.user.display_name else who.username)[:200]

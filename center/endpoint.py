@@ -16,6 +16,7 @@ import zenoh
 from base.storage.database import Database
 from center.anchors import AnchorBook
 from center.receiver import Receiver
+from center.storage import rejections
 from schemas.base import ID_PATTERN, iso, utcnow
 from schemas.config import CentralConfig
 from schemas.errors import BurnedgeError, TransferRejected
@@ -27,7 +28,6 @@ log = logging.getLogger("burnedge.central")
 _SITE = re.compile(SITE_ID_PATTERN)
 _ID = re.compile(ID_PATTERN)
 _SHA = re.compile(r"\A[0-9a-f]{64}\Z")
-KEEP_REJECTIONS = 10_000
 
 
 class Endpoint:
@@ -109,12 +109,8 @@ class Endpoint:
         log.warning("rejected %s (%s): %s", key, exc.code, exc.detail)
         try:
             with self.db.write() as conn:
-                conn.execute(
-                    "INSERT INTO rejections (at, site_id, code, reason, key) VALUES (?,?,?,?,?)",
-                    (iso(utcnow()), site_id, exc.code, exc.detail, key[:500]),
-                )
-                conn.execute(
-                    "DELETE FROM rejections WHERE id <= (SELECT MAX(id) FROM rejections) - ?", (KEEP_REJECTIONS,)
+                rejections.record_rejection(
+                    conn, at=iso(utcnow()), site_id=site_id, code=exc.code, reason=exc.detail, key=key[:500]
                 )
         except BurnedgeError as exc2:
             log.warning("could not record the rejection: %s", exc2.detail)

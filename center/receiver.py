@@ -21,13 +21,15 @@ import msgspec
 from base.storage import audit
 from base.storage.database import Database
 from center.files import PartStore
+from center.storage import cases, notes, transfers
 from schemas.base import iso, utcnow
+from schemas.central import Announcement
 from schemas.config import CentralConfig
 from schemas.errors import TransferRejected
 from schemas.transfer import (
     PROTOCOL,
-    URGENCY_ORDER,
     AnnounceReply,
+    BundleManifest,
     CommitReply,
     MailRequest,
     Receipt,
@@ -63,40 +65,34 @@ class Receiver:
         manifest = _decode(_manifest, envelope.body, "manifest")
         self._check_manifest(site_id, manifest)
         conn = self.db.connection()
-        stored = conn.execute(
-            "SELECT receipt FROM bundles WHERE site_id = ? AND bundle_id = ?", (site_id, manifest.bundle_id)
-        ).fetchone()
-        if stored is not None:
+        receipt = cases.find_receipt(conn, site_id, manifest.bundle_id)
+        if receipt is not None:
             log.info(
                 "%s re-announced stored bundle %s: answered with its receipt, nothing stored again",
                 site_id,
                 manifest.bundle_id,
             )
-            return AnnounceReply(status="stored", receipt=_envelope.decode(stored["receipt"]))
+            return AnnounceReply(status="stored", receipt=receipt)
         self._check_version(conn, site_id, manifest)
         body_sha = hashlib.sha256(envelope.body).hexdigest()
         with self.db.write() as conn:
-            row = conn.execute(
-                "SELECT manifest_sha256 FROM incoming WHERE site_id = ? AND bundle_id = ?",
-                (site_id, manifest.bundle_id),
-            ).fetchone()
-            if row is not None and row["manifest_sha256"] != body_sha:
+            earlier = transfers.find_announcement(conn, site_id, manifest.bundle_id)
+            if earlier is not None and earlier.manifest_sha256 != body_sha:
                 raise TransferRejected(
                     f"bundle {manifest.bundle_id} was announced before with another manifest", code="manifest-conflict"
                 )
-            if row is None:
-                conn.execute(
-                    "INSERT INTO incoming (site_id, bundle_id, envelope, manifest_sha256, encounter_id,"
-                    " version, chunks, announced_at) VALUES (?,?,?,?,?,?,?,?)",
-                    (
-                        site_id,
-                        manifest.bundle_id,
-                        payload,
-                        body_sha,
-                        manifest.encounter_id,
-                        manifest.version,
-                        len(manifest.chunks),
-                        iso(utcnow()),
+            if earlier is None:
+                transfers.insert_announcement(
+                    conn,
+                    Announcement(
+                        site_id=site_id,
+                        bundle_id=manifest.bundle_id,
+                        envelope=payload,
+                        manifest_sha256=body_sha,
+                        encounter_id=manifest.encounter_id,
+                        version=manifest.version,
+                        chunks=len(manifest.chunks),
+                        announced_at=iso(utcnow()),
                     ),
                 )
         self._manifests[(site_id, manifest.bundle_id)] = manifest
@@ -131,7 +127,7 @@ class Receiver:
     # commit -------------------------------------------------------------------------
     def commit(self, site_id: str, bundle_id: str) -> CommitReply:
         with self._lock(site_id, bundle_id):
-            stored = self._stored_receipt(site_id, bundle_id)
+            stored = cases.find_receipt(self.db.connection(), site_id, bundle_id)
             if stored is not None:
                 return CommitReply(status="stored", receipt=stored)
             manifest = self._incoming(site_id, bundle_id)
@@ -166,14 +162,7 @@ class Receiver:
             raise TransferRejected("the bundle inside does not match its signed announcement", code="manifest-mismatch")
         for part in manifest.parts:
             self.parts.put(part.sha256, parts[part.name])
-        row = (
-            self.db.connection()
-            .execute(
-                "SELECT manifest_sha256 FROM incoming WHERE site_id = ? AND bundle_id = ?",
-                (site_id, transfer.bundle_id),
-            )
-            .fetchone()
-        )
+        announced = self._announcement(site_id, transfer.bundle_id)
         receipt = self.keys.sign(
             "receipt",
             Receipt(
@@ -181,13 +170,13 @@ class Receiver:
                 site_id=site_id,
                 bundle_id=transfer.bundle_id,
                 version=transfer.version,
-                manifest_sha256=row["manifest_sha256"],
+                manifest_sha256=announced.manifest_sha256,
                 stored_at=iso(utcnow()),
                 duplicate=False,
             ),
         )
         try:
-            self._insert(site_id, manifest, row["manifest_sha256"], receipt)
+            self._insert(site_id, manifest, announced.manifest_sha256, receipt)
         except sqlite3.IntegrityError as exc:
             raise TransferRejected(
                 f"version {manifest.version} of encounter {manifest.encounter_id} is already "
@@ -206,33 +195,12 @@ class Receiver:
         )
         return receipt
 
-    def _insert(self, site_id: str, manifest, manifest_sha256: str, receipt: SignedEnvelope) -> None:
+    def _insert(self, site_id: str, manifest: BundleManifest, manifest_sha256: str, receipt: SignedEnvelope) -> None:
         with self.db.write() as conn:
-            conn.execute(
-                "INSERT INTO bundles (site_id, bundle_id, encounter_id, patient_id, version, supersedes, urgency,"
-                " urgency_rank, summary, manifest, manifest_sha256, stored_at, receipt)"
-                " VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?)",
-                (
-                    site_id,
-                    manifest.bundle_id,
-                    manifest.encounter_id,
-                    manifest.patient_id,
-                    manifest.version,
-                    manifest.supersedes,
-                    manifest.summary.urgency.value,
-                    URGENCY_ORDER[manifest.summary.urgency],
-                    msgspec.json.encode(manifest.summary).decode(),
-                    msgspec.json.encode(manifest).decode(),
-                    manifest_sha256,
-                    iso(utcnow()),
-                    msgspec.msgpack.encode(receipt),
-                ),
+            cases.insert_bundle(
+                conn, site_id, manifest, manifest_sha256=manifest_sha256, stored_at=iso(utcnow()), receipt=receipt
             )
-            conn.executemany(
-                "INSERT INTO bundle_parts (site_id, bundle_id, name, media_type, sha256, size) VALUES (?,?,?,?,?,?)",
-                [(site_id, manifest.bundle_id, p.name, p.media_type, p.sha256, p.size) for p in manifest.parts],
-            )
-            conn.execute("DELETE FROM incoming WHERE site_id = ? AND bundle_id = ?", (site_id, manifest.bundle_id))
+            transfers.delete_announcement(conn, site_id, manifest.bundle_id)
             audit.append(
                 conn,
                 action="bundle.store",
@@ -253,39 +221,23 @@ class Receiver:
             raise TransferRejected("the mail request names another site or center", code="misaddressed")
         now = iso(utcnow())
         with self.db.write() as conn:
-            conn.execute(
-                "UPDATE notes SET delivered_at = ? WHERE site_id = ? AND seq <= ? AND delivered_at IS NULL",
-                (now, site_id, ask.after),
-            )
-            conn.execute(
-                "INSERT INTO mail_cursors (site_id, acked_seq, last_poll_at) VALUES (?,?,?) ON CONFLICT"
-                " (site_id) DO UPDATE SET acked_seq = MAX(acked_seq, excluded.acked_seq),"
-                " last_poll_at = excluded.last_poll_at",
-                (site_id, ask.after, now),
-            )
-            rows = conn.execute(
-                "SELECT message FROM notes WHERE site_id = ? AND seq > ? AND message IS NOT NULL ORDER BY seq LIMIT ?",
-                (site_id, ask.after, MAIL_PAGE),
-            ).fetchall()
-        return [_envelope.decode(r["message"]) for r in rows]
+            notes.mark_delivered(conn, site_id, ask.after, now)
+            notes.record_poll(conn, site_id, ask.after, now)
+            return notes.sealed_after(conn, site_id, ask.after, MAIL_PAGE)
 
     def drop_stale(self, days: float) -> int:
         """Forget transfers announced more than `days` ago and never committed (the clinic may announce again)."""
         cutoff = iso(utcnow() - dt.timedelta(days=days))
-        rows = (
-            self.db.connection()
-            .execute("SELECT site_id, bundle_id FROM incoming WHERE announced_at < ?", (cutoff,))
-            .fetchall()
-        )
-        for row in rows:
-            self._drop_incoming(row["site_id"], row["bundle_id"])
+        stale = transfers.announced_before(self.db.connection(), cutoff)
+        for announced in stale:
+            self._drop_incoming(announced.site_id, announced.bundle_id)
             log.info(
                 "dropped the unfinished transfer of %s from %s (announced before %s)",
-                row["bundle_id"],
-                row["site_id"],
+                announced.bundle_id,
+                announced.site_id,
                 cutoff,
             )
-        return len(rows)
+        return len(stale)
 
     # checks -------------------------------------------------------------------------
     def verified(self, site_id: str, payload: bytes, kind: str) -> tuple[SignedEnvelope, SiteIdentity]:
@@ -325,16 +277,12 @@ class Receiver:
                 f"bundle {m.bundle_id} has chunks over {self.config.max_chunk_kib} KiB", code="too-large"
             )
 
-    def _check_version(self, conn, site_id: str, m: TransferManifest) -> None:
-        row = conn.execute(
-            "SELECT bundle_id, version FROM bundles WHERE site_id = ? AND encounter_id = ? ORDER BY"
-            " version DESC LIMIT 1",
-            (site_id, m.encounter_id),
-        ).fetchone()
-        if row is not None and row["version"] >= m.version:
+    def _check_version(self, conn: sqlite3.Connection, site_id: str, m: TransferManifest) -> None:
+        latest = cases.latest_of_encounter(conn, site_id, m.encounter_id)
+        if latest is not None and latest.version >= m.version:
             raise TransferRejected(
                 f"version {m.version} of encounter {m.encounter_id} is not newer than version "
-                f"{row['version']} already stored (bundle {row['bundle_id']}): a replayed or "
+                f"{latest.version} already stored (bundle {latest.bundle_id}): a replayed or "
                 "out-of-date bundle",
                 code="replayed",
             )
@@ -343,32 +291,23 @@ class Receiver:
         cached = self._manifests.get((site_id, bundle_id))
         if cached is not None:
             return cached
-        row = (
-            self.db.connection()
-            .execute("SELECT envelope FROM incoming WHERE site_id = ? AND bundle_id = ?", (site_id, bundle_id))
-            .fetchone()
-        )
-        if row is None:
-            raise TransferRejected(f"bundle {bundle_id} from {site_id} was never announced", code="unannounced")
-        manifest = _manifest.decode(_envelope.decode(row["envelope"]).body)
+        manifest = _manifest.decode(_envelope.decode(self._announcement(site_id, bundle_id).envelope).body)
         self._manifests[(site_id, bundle_id)] = manifest
         return manifest
+
+    def _announcement(self, site_id: str, bundle_id: str) -> Announcement:
+        announced = transfers.find_announcement(self.db.connection(), site_id, bundle_id)
+        if announced is None:
+            raise TransferRejected(f"bundle {bundle_id} from {site_id} was never announced", code="unannounced")
+        return announced
 
     def _held(self, site_id: str, manifest: TransferManifest) -> list[int]:
         folder = self.staging / site_id / manifest.bundle_id
         return [i for i, ref in enumerate(manifest.chunks) if _size_ok(folder / f"{i:06d}.chunk", ref.size)]
 
-    def _stored_receipt(self, site_id: str, bundle_id: str) -> SignedEnvelope | None:
-        row = (
-            self.db.connection()
-            .execute("SELECT receipt FROM bundles WHERE site_id = ? AND bundle_id = ?", (site_id, bundle_id))
-            .fetchone()
-        )
-        return None if row is None else _envelope.decode(row["receipt"])
-
     def _drop_incoming(self, site_id: str, bundle_id: str) -> None:
         with self.db.write() as conn:
-            conn.execute("DELETE FROM incoming WHERE site_id = ? AND bundle_id = ?", (site_id, bundle_id))
+            transfers.delete_announcement(conn, site_id, bundle_id)
         shutil.rmtree(self.staging / site_id / bundle_id, ignore_errors=True)
         self._manifests.pop((site_id, bundle_id), None)
 

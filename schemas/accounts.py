@@ -114,3 +114,48 @@ class Health(Frozen):
 
     status: str
     version: str
+
+
+# Rows as base/storage/accounts.py hands them out ------------------------------------------------------------
+
+
+class StoredUser(Frozen):
+    """A user as stored: the account and its password's Argon2id hash (never sent out)."""
+
+    user: User
+    password_hash: str
+
+
+class StoredSession(Frozen):
+    """A login session joined with its user and its phone (if any): what a bearer token is checked against."""
+
+    user_id: str
+    username: str
+    role: Role
+    active: bool
+    must_change_password: bool
+    device_id: str | None
+    expires_at: Timestamp
+    revoked_at: Timestamp | None
+    device_revoked_at: Timestamp | None
+    """When the session's phone was unpaired; None for a session without a phone or with a paired one."""
+
+
+class StoredPairingCode(Frozen):
+    """A pairing code as stored: only its hash, who asked for it and for which phone."""
+
+    code_hash: str
+    device_name: str
+    created_by: str
+    created_at: Timestamp
+    expires_at: Timestamp
+    used_at: Timestamp | None
+
+
+class ThrottleCount(Frozen):
+    """The login throttle's count of recent unsuccessful attempts for one key (an account or a client address)."""
+
+    key: str
+    failures: int
+    last_attempt_at: Timestamp
+    locked_until: Timestamp | None

@@ -154,6 +154,28 @@ class UploadPhase(enum.StrEnum):
     expired = "expired"
 
 
+class StoredUpload(Frozen):
+    """An upload as the gateway's database holds it (the bytes so far are in its .part file)."""
+
+    id: str
+    encounter_id: str
+    length: int
+    """The whole file's size, as the phone announced it."""
+    metadata: dict[str, str]
+    """The tus Upload-Metadata, as sent."""
+    filename: str
+    state: UploadPhase
+    created_by: str
+    """The user id of who started it."""
+    device_id: str | None
+    created_at: str
+    expires_at: str
+    asset_id: str | None
+    """Once complete: the asset it was stored as."""
+    error: str | None
+    """Why it failed, when it did."""
+
+
 class UploadStatus(Frozen):
     """An upload as the gateway holds it (GET /api/v1/uploads/{id}); tus clients use HEAD instead."""
 

@@ -1,9 +1,10 @@
-"""What the burn center's consultant API returns and accepts."""
+"""What the burn center's consultant API returns and accepts, and the rows its storage (center/storage/) hands back."""
 
 from __future__ import annotations
 
 import msgspec
 
+from schemas.audit import AuditHead
 from schemas.base import Frozen, LongText, Message
 from schemas.transfer import BundleManifest, CaseSummary, ConsultationNote, Recommendation, SiteId, Urgency
 
@@ -55,3 +56,47 @@ class RejectionItem(Frozen):
     code: str
     reason: str
     key: str
+
+
+# Rows as center/storage/ hands them out ---------------------------------------------------------------------
+
+
+class StoredCase(Frozen):
+    """A stored bundle as a case, with its manifest."""
+
+    case: CaseItem
+    manifest: BundleManifest
+
+
+class StoredBundle(Frozen):
+    """What identifies a stored bundle version."""
+
+    site_id: str
+    bundle_id: str
+    encounter_id: str
+    patient_id: str
+    version: int
+    manifest_sha256: str
+    stored_at: str
+
+
+class Announcement(Frozen):
+    """A transfer a clinic announced and has not committed yet."""
+
+    site_id: str
+    bundle_id: str
+    envelope: bytes
+    """The signed transfer manifest, as the clinic sent it."""
+    manifest_sha256: str
+    """SHA-256 of the envelope's body: a second announcement of the bundle must carry the same manifest."""
+    encounter_id: str
+    version: int
+    chunks: int
+    announced_at: str
+
+
+class StoredAnchor(Frozen):
+    """An audit-chain head of a clinic's that the center signed, and when."""
+
+    head: AuditHead
+    anchored_at: str

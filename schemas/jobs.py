@@ -162,6 +162,39 @@ class AnalysisJob(Frozen):
     the details are at /attempts."""
 
 
+class StoredJob(Frozen):
+    """A row of `analysis_jobs` as the queue keeps it, all but its `request` (a JobInputs, read on its own).
+    AnalysisJob is what the API shows of it."""
+
+    id: str
+    encounter_id: str
+    patient_id: str
+    input_digest: str
+    """What makes two requests the same analysis (gateway/services/analyses.py)."""
+    state: JobState
+    priority: int
+    max_attempts: int
+    next_attempt_at: str
+    pictures: int
+    created_at: str
+    created_by: str
+    user_id: str
+    stage: str = ""
+    fraction: float = 0.0
+    message: str = ""
+    attempts: int = 0
+    lease_owner: str | None = None
+    lease_expires_at: str | None = None
+    cancel_requested: bool = False
+    error: str | None = None
+    result_status: str | None = None
+    started_at: str | None = None
+    finished_at: str | None = None
+    cleaned_at: str | None = None
+    """When the retention clean-up removed its work files."""
+    captured: CaptureTime | None = None
+
+
 class JobEvent(Frozen):
     """One server-sent event of GET /api/v1/analyses/{id}/events (event type 'progress', then 'end')."""
 

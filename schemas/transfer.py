@@ -287,6 +287,16 @@ class OutboxEntry(Frozen):
     """True when a send was asked for but nothing had changed since this bundle: no new version was made."""
 
 
+class OutboxBundle(Frozen):
+    """An outbox row as the clinic keeps it: the entry people see, and what only the queue and the sender read."""
+
+    entry: OutboxEntry
+    content_digest: str
+    """Over the parts' names and hashes: queueing the same content again makes no new version."""
+    envelope: bytes
+    """The msgpack of the signed TransferManifest, announced as stored on every try."""
+
+
 class SyncStatus(Frozen):
     """The clinic's link to the burn center, for the IT person and the clinician's "sent" badge."""
 
@@ -306,3 +316,17 @@ class SyncStatus(Frozen):
     audit_anchor_problem: str | None = None
     """Set when the center refused to anchor the chain: it no longer runs through the entry anchored before
     (entries removed, or the database replaced by an older copy). Run `burnedge audit verify`."""
+
+
+class SyncRoundState(Frozen):
+    """The clinic's sync rounds as the gateway keeps them between rounds (the sync_state table): what the status
+    reports and what the backoff waits on. A value never written is None (failures 0)."""
+
+    last_round_at: str | None = None
+    last_success_at: str | None = None
+    last_error: str | None = None
+    next_round_at: str | None = None
+    """When the backoff lets the next round run."""
+    failures: int = 0
+    """Rounds failed in a row since the last success."""
+    audit_anchor_problem: str | None = None

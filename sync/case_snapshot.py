@@ -112,14 +112,9 @@ def _urgency(assessment: Assessment | None) -> tuple[Urgency, list[str]]:
 
 def _pictures(conn: sqlite3.Connection, media: MediaStore, encounter_id: str, limit: int) -> list[PartData]:
     """The encounter's photos in the order they were taken in (up to `limit`; overlays show analysed ones too)."""
-    rows = conn.execute(
-        "SELECT id, sha256, media_type FROM assets WHERE encounter_id = ? AND kind = 'photo'"
-        " ORDER BY created_at, id LIMIT ?",
-        (encounter_id, limit),
-    ).fetchall()
     suffixes = {"image/jpeg": ".jpg", "image/png": ".png", "image/heic": ".heic"}
     return [
-        PartData(f"photos/{r['id']}{suffixes.get(r['media_type'], '')}", media.blob(r["sha256"]).read_bytes())
-        for r in rows
-        if media.blob(r["sha256"]).exists()
+        PartData(f"photos/{p.id}{suffixes.get(p.media_type, '')}", media.blob(p.sha256).read_bytes())
+        for p in store.encounter_photos(conn, encounter_id, limit)
+        if media.blob(p.sha256).exists()
     ]

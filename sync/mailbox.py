@@ -21,6 +21,7 @@ from schemas.records import RecordKind
 from schemas.transfer import Consultation, ConsultationNote, MailRequest, SealedMessage, SignedEnvelope, SiteIdentity
 from sync.keys import SiteKeys, verify_envelope
 from sync.sealing import open_chunks, seal, unseal_key
+from sync.storage import state as sync_state
 from sync.wire import request
 from sync.zenoh_link import Keys
 
@@ -53,9 +54,7 @@ def open_note(envelope: SignedEnvelope, center: SiteIdentity, own: SiteKeys) -> 
 
 def fetch(session, link: Keys, db: Database, keys: SiteKeys, center: SiteIdentity, config: Config) -> int:
     """Ask the center for new notes and store them; returns how many were new."""
-    cursor_key = f"mail_after:{center.site_id}"
-    row = db.connection().execute("SELECT value FROM sync_state WHERE key = ?", (cursor_key,)).fetchone()
-    after = int(row["value"]) if row else 0
+    after = sync_state.mail_cursor(db.connection(), center.site_id)
     ask = keys.sign(
         "mail-request", MailRequest(site_id=keys.site_id, center_id=center.site_id, after=after, sent_at=iso(utcnow()))
     )
@@ -68,17 +67,13 @@ def fetch(session, link: Keys, db: Database, keys: SiteKeys, center: SiteIdentit
             # Skipped, not retried: what fails these checks was not written by the center we trust.
             log.error("a message from %s was rejected: %s", center.site_id, getattr(exc, "detail", exc))
             continue
-        new += _store(db, note, center.site_id, seq, cursor_key)
+        new += _store(db, note, center.site_id, seq)
     return new
 
 
-def _store(db: Database, note: ConsultationNote, center_id: str, seq: int, cursor_key: str) -> int:
+def _store(db: Database, note: ConsultationNote, center_id: str, seq: int) -> int:
     with db.write() as conn:
-        conn.execute(
-            "INSERT INTO sync_state (key, value) VALUES (?, ?) ON CONFLICT (key) DO UPDATE SET value ="
-            " MAX(CAST(value AS INTEGER), CAST(excluded.value AS INTEGER))",
-            (cursor_key, str(seq)),
-        )
+        sync_state.advance_mail_cursor(conn, center_id, seq)
         if store.find_head(conn, RecordKind.consultation, note.note_id) is not None:
             return 0
         record = Consultation(encounter_id=note.encounter_id, note=note, received_at=iso(utcnow()), signed_by=center_id)

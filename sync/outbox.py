@@ -22,11 +22,12 @@ from base.storage.database import Database
 from base.storage.durable import fsync_dir, write_file
 from schemas.base import iso, utcnow
 from schemas.config import Config
-from schemas.errors import Conflict, NotFound
-from schemas.transfer import PROTOCOL, OutboxEntry, OutboxState, SignedEnvelope, TransferManifest
+from schemas.errors import Conflict
+from schemas.transfer import PROTOCOL, OutboxBundle, OutboxEntry, OutboxState, SignedEnvelope, TransferManifest
 from sync import bundle, case_snapshot, peers
 from sync.keys import SiteKeys
 from sync.sealing import seal
+from sync.storage import outbox as store
 
 log = logging.getLogger("burnedge.sync")
 _envelope = msgspec.msgpack.Decoder(SignedEnvelope)
@@ -46,20 +47,17 @@ class Outbox:
                 center = peers.only_center(conn, self.config.sync.center_id)
                 snap = case_snapshot.snapshot(conn, self.config, encounter_id)
                 digest = _content_digest(snap.parts)
-                last = conn.execute(
-                    "SELECT * FROM outbox WHERE center_id = ? AND encounter_id = ? ORDER BY version DESC LIMIT 1",
-                    (center.site_id, encounter_id),
-                ).fetchone()
-            if last is not None and last["content_digest"] == digest:
-                return msgspec.structs.replace(_entry(last), unchanged=True)
-            version = 1 if last is None else last["version"] + 1
+                last = store.latest(conn, center.site_id, encounter_id)
+            if last is not None and last.content_digest == digest:
+                return msgspec.structs.replace(last.entry, unchanged=True)
+            version = 1 if last is None else last.entry.version + 1
             bundle_id = str(uuid.uuid4())
             manifest = case_snapshot.manifest_for(
                 snap,
                 bundle_id=bundle_id,
                 site_id=keys.site_id,
                 version=version,
-                supersedes=last["bundle_id"] if last else None,
+                supersedes=last.entry.bundle_id if last else None,
                 created_by=user,
             )
             sealed = seal(
@@ -84,22 +82,18 @@ class Outbox:
             self._write_chunks(bundle_id, sealed.chunks)
             try:
                 with self.db.write() as conn:
-                    conn.execute(
-                        "INSERT INTO outbox (bundle_id, encounter_id, version, center_id, content_digest, state,"
-                        " envelope, chunks, bytes, created_at, created_by) VALUES (?,?,?,?,?,?,?,?,?,?,?)",
-                        (
-                            bundle_id,
-                            encounter_id,
-                            version,
-                            center.site_id,
-                            digest,
-                            OutboxState.queued.value,
-                            msgspec.msgpack.encode(envelope),
-                            len(sealed.chunks),
-                            sum(len(c) for c in sealed.chunks),
-                            manifest.created_at,
-                            user,
-                        ),
+                    store.insert_queued(
+                        conn,
+                        bundle_id=bundle_id,
+                        encounter_id=encounter_id,
+                        version=version,
+                        center_id=center.site_id,
+                        content_digest=digest,
+                        envelope=msgspec.msgpack.encode(envelope),
+                        chunks=len(sealed.chunks),
+                        size=sum(len(c) for c in sealed.chunks),
+                        created_at=manifest.created_at,
+                        created_by=user,
                     )
                     audit.append(
                         conn,
@@ -127,62 +121,43 @@ class Outbox:
         return self.get(bundle_id)
 
     def get(self, bundle_id: str) -> OutboxEntry:
-        row = self.db.connection().execute("SELECT * FROM outbox WHERE bundle_id = ?", (bundle_id,)).fetchone()
-        if row is None:
-            raise NotFound(f"no bundle {bundle_id} in the outbox")
-        return _entry(row)
+        return store.get(self.db.connection(), bundle_id).entry
 
     def entries(self, encounter_id: str | None = None, limit: int = 200) -> list[OutboxEntry]:
-        sql, params = "SELECT * FROM outbox", []
-        if encounter_id is not None:
-            sql, params = sql + " WHERE encounter_id = ?", [encounter_id]
-        rows = self.db.connection().execute(sql + " ORDER BY created_at DESC LIMIT ?", [*params, limit])
-        return [_entry(r) for r in rows]
+        return store.entries(self.db.connection(), encounter_id, limit)
 
-    def pending(self) -> list[sqlite3.Row]:
+    def pending(self) -> list[OutboxBundle]:
         """Bundles still to deliver, oldest first (the center sees each clinic's versions in order)."""
-        return (
-            self.db.connection()
-            .execute("SELECT * FROM outbox WHERE state = ? ORDER BY created_at, version", (OutboxState.queued.value,))
-            .fetchall()
-        )
+        return store.pending(self.db.connection())
 
-    def envelope(self, row: sqlite3.Row) -> SignedEnvelope:
-        return _envelope.decode(row["envelope"])
+    def envelope(self, queued: OutboxBundle) -> SignedEnvelope:
+        return _envelope.decode(queued.envelope)
 
     def chunk(self, bundle_id: str, index: int) -> bytes:
         return (self.root / bundle_id / f"{index:06d}.chunk").read_bytes()
 
     def progress(self, bundle_id: str, sent_chunks: int) -> None:
         with self.db.write() as conn:
-            conn.execute(
-                "UPDATE outbox SET sent_chunks = MAX(sent_chunks, ?) WHERE bundle_id = ?", (sent_chunks, bundle_id)
-            )
+            store.record_progress(conn, bundle_id, sent_chunks)
 
     def failed_attempt(self, bundle_id: str, error: str) -> None:
         with self.db.write() as conn:
-            conn.execute(
-                "UPDATE outbox SET attempts = attempts + 1, last_error = ? WHERE bundle_id = ?", (error, bundle_id)
-            )
+            store.record_failed_attempt(conn, bundle_id, error)
 
     def delivered(self, bundle_id: str, receipt: SignedEnvelope) -> None:
         with self.db.write() as conn:
-            row = conn.execute("SELECT * FROM outbox WHERE bundle_id = ?", (bundle_id,)).fetchone()
-            if row["state"] == OutboxState.delivered.value:
+            entry = store.get(conn, bundle_id).entry
+            if entry.state is OutboxState.delivered:
                 return
-            conn.execute(
-                "UPDATE outbox SET state = ?, delivered_at = ?, receipt = ?, sent_chunks = chunks,"
-                " last_error = NULL WHERE bundle_id = ?",
-                (OutboxState.delivered.value, iso(utcnow()), msgspec.msgpack.encode(receipt), bundle_id),
-            )
+            store.mark_delivered(conn, bundle_id, iso(utcnow()), msgspec.msgpack.encode(receipt))
             audit.append(
                 conn,
                 action="sync.delivered",
                 user_id=None,
                 device_id=None,
                 kind="encounter",
-                record_id=row["encounter_id"],
-                detail=f"bundle {bundle_id} version {row['version']} stored by {row['center_id']}",
+                record_id=entry.encounter_id,
+                detail=f"bundle {bundle_id} version {entry.version} stored by {entry.center_id}",
             )
         shutil.rmtree(self.root / bundle_id, ignore_errors=True)  # the center holds it now
 
@@ -198,21 +173,3 @@ class Outbox:
 def _content_digest(parts: list[bundle.PartData]) -> str:
     described = [(p.name, p.described.sha256) for p in parts]
     return hashlib.sha256(msgspec.json.encode(described)).hexdigest()
-
-
-def _entry(row: sqlite3.Row) -> OutboxEntry:
-    return OutboxEntry(
-        bundle_id=row["bundle_id"],
-        encounter_id=row["encounter_id"],
-        version=row["version"],
-        center_id=row["center_id"],
-        state=OutboxState(row["state"]),
-        chunks=row["chunks"],
-        sent_chunks=row["sent_chunks"],
-        bytes=row["bytes"],
-        created_at=row["created_at"],
-        created_by=row["created_by"],
-        attempts=row["attempts"],
-        last_error=row["last_error"],
-        delivered_at=row["delivered_at"],
-    )

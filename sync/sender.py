@@ -24,6 +24,7 @@ from schemas.transfer import (
     AnnounceReply,
     ChunkRef,
     CommitReply,
+    OutboxBundle,
     Receipt,
     SignedEnvelope,
     SiteIdentity,
@@ -70,15 +71,16 @@ class Sender:
                 f"{str(exc).split(' at /')[0]}"
             ) from exc
         with session_cm as session:
-            for row in self.outbox.pending():
+            for queued in self.outbox.pending():
+                bundle_id = queued.entry.bundle_id
                 try:
-                    self._deliver(session, link, center, row, report)
+                    self._deliver(session, link, center, queued, report)
                 except TransferRejected as exc:
-                    log.warning("center %s rejected bundle %s: %s", center.site_id, row["bundle_id"], exc.detail)
-                    self.outbox.failed_attempt(row["bundle_id"], f"rejected by the center: {exc.detail}")
-                    report.rejected[row["bundle_id"]] = exc.detail
+                    log.warning("center %s rejected bundle %s: %s", center.site_id, bundle_id, exc.detail)
+                    self.outbox.failed_attempt(bundle_id, f"rejected by the center: {exc.detail}")
+                    report.rejected[bundle_id] = exc.detail
                 except LinkDown as exc:
-                    self.outbox.failed_attempt(row["bundle_id"], exc.detail)
+                    self.outbox.failed_attempt(bundle_id, exc.detail)
                     raise
             report.notes_received = mailbox.fetch(session, link, self.db, self.keys, center, self.config)
             try:  # last: the notes just stored are audited entries too
@@ -88,36 +90,38 @@ class Sender:
                 report.anchor_problem = exc.detail
         return report
 
-    def _deliver(self, session, link: Keys, center: SiteIdentity, row, report: RoundReport) -> None:
-        bundle_id = row["bundle_id"]
-        envelope_bytes = bytes(row["envelope"])
+    def _deliver(self, session, link: Keys, center: SiteIdentity, queued: OutboxBundle, report: RoundReport) -> None:
+        bundle_id = queued.entry.bundle_id
+        envelope_bytes = queued.envelope
         timeout = self.config.sync.query_timeout_s
         reply = msgspec.msgpack.decode(
             request(session, link.announce(self.keys.site_id), envelope_bytes, timeout), type=AnnounceReply
         )
         if reply.status == "stored" and reply.receipt is not None:
-            self._accept_receipt(center, row, reply.receipt)
+            self._accept_receipt(center, queued, reply.receipt)
             report.delivered.append(bundle_id)
             return
-        manifest_refs = msgspec.msgpack.decode(self.outbox.envelope(row).body, type=TransferManifest).chunks
+        manifest_refs = msgspec.msgpack.decode(self.outbox.envelope(queued).body, type=TransferManifest).chunks
         held = set(reply.held)
         need = [i for i in range(len(manifest_refs)) if i not in held]
         for _ in range(3):  # a center that lost unsynced chunks in a crash says which are missing at commit
             report.chunks_sent += self._send_chunks(
-                session, link, row, manifest_refs, need, len(manifest_refs) - len(need)
+                session, link, bundle_id, manifest_refs, need, len(manifest_refs) - len(need)
             )
             commit = msgspec.msgpack.decode(
                 request(session, link.commit(self.keys.site_id, bundle_id), b"", timeout), type=CommitReply
             )
             if commit.status == "stored" and commit.receipt is not None:
-                self._accept_receipt(center, row, commit.receipt)
+                self._accept_receipt(center, queued, commit.receipt)
                 report.delivered.append(bundle_id)
                 return
             need = commit.missing
         raise TransferRejected(f"the center still misses chunks of {bundle_id} after three sends", code="incomplete")
 
-    def _send_chunks(self, session, link: Keys, row, refs: list[ChunkRef], need: list[int], held: int) -> int:
-        bundle_id, timeout = row["bundle_id"], self.config.sync.query_timeout_s
+    def _send_chunks(
+        self, session, link: Keys, bundle_id: str, refs: list[ChunkRef], need: list[int], held: int
+    ) -> int:
+        timeout = self.config.sync.query_timeout_s
         window: deque = deque()
         acked, last_saved = held, time.monotonic()
 
@@ -145,25 +149,22 @@ class Sender:
         self.outbox.progress(bundle_id, acked)
         return len(need)
 
-    def _accept_receipt(self, center: SiteIdentity, row, receipt_env: SignedEnvelope) -> None:
+    def _accept_receipt(self, center: SiteIdentity, queued: OutboxBundle, receipt_env: SignedEnvelope) -> None:
+        bundle_id = queued.entry.bundle_id
         try:
             verify_envelope(receipt_env, center)
             receipt = msgspec.msgpack.decode(receipt_env.body, type=Receipt)
         except Exception as exc:
             raise TransferRejected(
-                f"the receipt for {row['bundle_id']} is not signed by {center.site_id}", code="bad-receipt"
+                f"the receipt for {bundle_id} is not signed by {center.site_id}", code="bad-receipt"
             ) from exc
-        body_sha = hashlib.sha256(self.outbox.envelope(row).body).hexdigest()
-        if (
-            receipt_env.kind != "receipt"
-            or receipt.bundle_id != row["bundle_id"]
-            or receipt.manifest_sha256 != body_sha
-        ):
-            raise TransferRejected(f"the receipt does not match bundle {row['bundle_id']}", code="bad-receipt")
-        self.outbox.delivered(row["bundle_id"], receipt_env)
+        body_sha = hashlib.sha256(self.outbox.envelope(queued).body).hexdigest()
+        if receipt_env.kind != "receipt" or receipt.bundle_id != bundle_id or receipt.manifest_sha256 != body_sha:
+            raise TransferRejected(f"the receipt does not match bundle {bundle_id}", code="bad-receipt")
+        self.outbox.delivered(bundle_id, receipt_env)
         log.info(
             "bundle %s delivered to %s%s",
-            row["bundle_id"],
+            bundle_id,
             center.site_id,
             " (it was already stored)" if receipt.duplicate else "",
         )

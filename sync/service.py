@@ -17,12 +17,14 @@ from base.storage.database import Database
 from schemas.base import iso, utcnow
 from schemas.config import Config
 from schemas.errors import BurnedgeError
-from schemas.transfer import OutboxEntry, OutboxState, SyncStatus
+from schemas.transfer import OutboxEntry, SyncStatus
 from sync import peers
 from sync.anchor import anchor_path, load_anchor
 from sync.keys import SiteKeys, load_keys
 from sync.outbox import Outbox
 from sync.sender import RoundReport, Sender
+from sync.storage import outbox as outbox_store
+from sync.storage import state as sync_state
 from sync.wire import LinkDown
 
 log = logging.getLogger("burnedge.sync")
@@ -75,9 +77,9 @@ class SyncService:
             pass  # run_round recorded and logged it
 
     def status(self) -> SyncStatus:
-        state = self._state()
         conn = self.db.connection()
-        counts = dict(conn.execute("SELECT state, COUNT(*) FROM outbox GROUP BY state").fetchall())
+        state = sync_state.round_state(conn)
+        counts = outbox_store.counts(conn)
         try:
             site_id = self.keys().site_id
         except BurnedgeError:
@@ -94,29 +96,25 @@ class SyncService:
             enabled=self.config.sync.enabled,
             site_id=site_id,
             center_id=center_id,
-            queued=counts.get(OutboxState.queued.value, 0),
-            delivered=counts.get(OutboxState.delivered.value, 0),
-            last_round_at=state.get("last_round_at"),
-            last_success_at=state.get("last_success_at"),
-            last_error=state.get("last_error"),
-            next_round_at=state.get("next_round_at"),
-            failures_in_a_row=int(state.get("failures", 0)),
+            queued=counts.queued,
+            delivered=counts.delivered,
+            last_round_at=state.last_round_at,
+            last_success_at=state.last_success_at,
+            last_error=state.last_error,
+            next_round_at=state.next_round_at,
+            failures_in_a_row=state.failures,
             audit_anchored_seq=kept.head.seq if kept else None,
             audit_anchored_at=kept.anchored_at if kept else None,
-            audit_anchor_problem=state.get("audit_anchor_problem"),
+            audit_anchor_problem=state.audit_anchor_problem,
         )
 
     # backoff state ----------------------------------------------------------------
-    def _state(self) -> dict[str, str]:
-        rows = self.db.connection().execute("SELECT key, value FROM sync_state WHERE key NOT LIKE 'mail_after:%'")
-        return {r["key"]: r["value"] for r in rows}
-
     def _due(self) -> bool:
-        nxt = self._state().get("next_round_at")
+        nxt = sync_state.round_state(self.db.connection()).next_round_at
         return nxt is None or dt.datetime.fromisoformat(nxt) <= utcnow()
 
     def _failed(self, reason: str) -> None:
-        failures = int(self._state().get("failures", 0)) + 1
+        failures = sync_state.round_state(self.db.connection()).failures + 1
         cap = min(self.config.sync.retry_max_s, self.config.sync.retry_base_s * 2 ** (failures - 1))
         wait = random.uniform(0, cap)
         now = utcnow()
@@ -135,9 +133,4 @@ class SyncService:
 
     def _put(self, clear: tuple[str, ...] = (), **values: str) -> None:
         with self.db.write() as conn:
-            conn.executemany(
-                "INSERT INTO sync_state (key, value) VALUES (?, ?) ON CONFLICT (key) DO UPDATE SET"
-                " value = excluded.value",
-                list(values.items()),
-            )
-            conn.executemany("DELETE FROM sync_state WHERE key = ?", [(k,) for k in clear])
+            sync_state.put_round_values(conn, values, clear)

@@ -14,7 +14,7 @@ from pathlib import Path
 import httpx
 import pytest
 
-from tests.conftest import FAST_HASH_ENV, PASSWORD, REPO, GatewayProcess, add_user_cli, free_port
+from harness.processes import FAST_HASH_ENV, PASSWORD, REPO, GatewayProcess, add_user_cli, free_port
 
 pytestmark = pytest.mark.server
 

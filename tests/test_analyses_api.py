@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 
 from burnedge.demo_client import GatewayClient, GatewayError
+from harness.bodies import encounter_body, patient_body
 from processing.phantom.generate import run as render_phantom
 from schemas.errors import NotFound
 from schemas.phantom import PhantomShape, PhantomSpec
-from tests.conftest import encounter_body, patient_body
 
 TINY = {"views": 6, "width": 800, "height": 600}
 

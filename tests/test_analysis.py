@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 import trimesh
 
+from harness.processes import REPO
 from processing.analysis import confidence, segment_views
 from processing.analysis.pipeline import Patient
 from processing.analysis.pipeline import run as analyze
@@ -23,7 +24,6 @@ from schemas.config import AnalysisConfig, Config
 from schemas.errors import InvalidInput
 from schemas.reconstruction import FailureCode
 from schemas.segmentation import MaskSource
-from tests.conftest import REPO
 from tests.phantom_helpers import SMALL, hide_marker, render_small_patch
 
 

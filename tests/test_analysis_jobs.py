@@ -13,8 +13,9 @@ from pathlib import Path
 import pytest
 
 from burnedge.demo_client import GatewayClient
+from harness.bodies import encounter_body, patient_body
+from harness.processes import GatewayProcess, add_user_cli, free_port, login
 from processing.capture.stamp import with_capture_time
-from tests.conftest import GatewayProcess, add_user_cli, encounter_body, free_port, login, patient_body
 from tests.phantom_helpers import SMALL, render_small_patch
 
 FAST_QUEUE = {

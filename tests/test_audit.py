@@ -8,7 +8,8 @@ import subprocess
 import sys
 
 from base.storage import audit
-from tests.conftest import REPO, encounter_body, patient_body
+from harness.bodies import encounter_body, patient_body
+from harness.processes import REPO
 
 
 def _write_some_records(client, headers) -> None:

@@ -10,12 +10,12 @@ from pathlib import Path
 import pytest
 
 from base.storage import audit
+from harness.bodies import patient_body
 from schemas.audit import AuditAnchor, AuditHead
 from schemas.base import iso, utcnow
 from schemas.transfer import SiteRole
 from sync.anchor import ANCHOR_FILE, save_anchor
 from sync.keys import init_keys
-from tests.conftest import patient_body
 from tests.test_audit import _cli
 
 

@@ -8,10 +8,12 @@ import threading
 import pytest
 from litestar.testing import TestClient
 
+from harness.bodies import encounter_body, now, patient_body
+from harness.processes import PASSWORD, login
 from schemas.accounts import Role
 from schemas.errors import AuthenticationFailed, TooManyAttempts
 from schemas.ids import uuid7
-from tests.conftest import PASSWORD, encounter_body, login, make_user, now, patient_body
+from tests.conftest import make_user
 
 # The ways in: logging in and pairing a phone. Everything else needs a session.
 UNAUTHENTICATED = {("POST", "/api/v1/auth/login"), ("POST", "/api/v1/auth/pair"), ("GET", "/health")}

@@ -18,10 +18,11 @@ from burnedge.demo_client import GatewayClient
 from gateway.backup import snapshot
 from gateway.backup.stream import MAGIC
 from gateway.storage.database import Database
+from harness.bodies import patient_body
+from harness.processes import FAST_HASH_ENV, PASSWORD, REPO, free_port, wait_healthy
+from harness.sites import Sites, cli, record_case
 from schemas.config import Config, GatewayConfig
 from schemas.ids import uuid7
-from tests.conftest import FAST_HASH_ENV, PASSWORD, REPO, free_port, patient_body, wait_healthy
-from tests.sync_sites import Sites, cli, record_case
 
 PASSPHRASE = "horse staple battery correct"
 # Argon2id at its cheapest and small chunks, so that a test backup spans several chunks.

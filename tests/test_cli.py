@@ -13,8 +13,8 @@ import msgspec
 import pytest
 
 from burnedge.cli import build_parser
+from harness.processes import REPO
 from schemas.export import public_messages
-from tests.conftest import REPO
 
 
 def _commands(parser, prefix=()) -> list[tuple[str, ...]]:

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import pytest
 
+from harness.processes import REPO
 from schemas.config import load_config
 from schemas.config_docs import field_docs, render, sections
 from schemas.errors import InvalidInput
-from tests.conftest import REPO
 
 
 def test_every_config_field_has_a_docstring():

@@ -8,7 +8,7 @@ import sys
 
 import pytest
 
-from tests.conftest import FAST_HASH_ENV, REPO, free_port
+from harness.processes import FAST_HASH_ENV, REPO, free_port
 
 
 def test_the_demo_uploads_analyses_and_aligns_four_visits_then_exits(tmp_path):

@@ -18,12 +18,15 @@ import pytest
 import gateway.services.frames as frames_service
 from base.storage import audit, blobs
 from base.storage.blobs import MediaStore
+from gateway.storage import assets as asset_rows
+from harness.bodies import encounter_body, patient_body
+from harness.processes import REPO
 from processing.capture import media
 from processing.capture.frames import extract
 from schemas.config import FramesConfig, QualityGateConfig, UploadConfig
 from schemas.errors import InvalidInput
 from tests.capture_images import pan_scene, video
-from tests.conftest import REPO, SHARED, encounter_body, patient_body
+from tests.conftest import SHARED
 from tests.test_uploads import upload
 
 GATE = QualityGateConfig()
@@ -174,8 +177,8 @@ def test_a_video_the_extractor_fails_on_does_not_stop_the_others(client, auth, s
     assert len(_frame_rows(services, ids[1])) > 0  # the second video got its frames all the same
     # One more try at the next run (the failure may have been the gateway stopping), then no more.
     assert services.frames.pending() == [ids[0]] and services.frames.extract_pending() == 1
-    first = services.db.connection().execute("SELECT * FROM assets WHERE id = ?", (ids[0],)).fetchone()
-    assert first["frames_done_at"] and "RuntimeError" in first["frames_error"] and _frame_rows(services, ids[0]) == []
+    first = asset_rows.find_frames_progress(services.db.connection(), ids[0])
+    assert first.done_at and "RuntimeError" in first.error and _frame_rows(services, ids[0]) == []
     assert services.frames.pending() == [] and services.frames.extract_pending() == 0
 
 

@@ -30,8 +30,9 @@ from schemathesis.specs.openapi.checks import (
 )
 
 from base.web.errors import TUS_PATH
+from harness.bodies import encounter_body, patient_body
+from harness.processes import PASSWORD, REPO, add_user_cli
 from schemas.capture import TUS_VERSION
-from tests.conftest import PASSWORD, REPO, add_user_cli, encounter_body, patient_body
 
 pytestmark = pytest.mark.server
 

@@ -13,11 +13,12 @@ import msgspec
 import pytest
 
 import schemas
+from harness.bodies import encounter_body, patient_body
+from harness.processes import PASSWORD, add_user_cli
 from schemas.accounts import Username
 from schemas.base import Id
 from schemas.ids import uuid7
 from schemas.transfer import Sha256, SiteId
-from tests.conftest import PASSWORD, add_user_cli, encounter_body, patient_body
 
 pytestmark = pytest.mark.server
 

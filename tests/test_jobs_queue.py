@@ -14,6 +14,7 @@ from schemas.config import JobsConfig
 from schemas.errors import Conflict, NotFound
 from schemas.ids import uuid7
 from schemas.jobs import JobInputs, JobState
+from schemas.patient import EncounterMode
 
 FAST = JobsConfig(lease_s=0.6, heartbeat_s=0.2, retry_base_s=0.0, max_attempts=2)
 
@@ -27,25 +28,16 @@ def queue(tmp_path) -> JobQueue:
 
 
 def enqueue(queue: JobQueue, priority: int, encounter: str | None = None) -> str:
-    """A job row as the analysis service writes it (the service itself is tested through the API)."""
-    job_id, now = uuid7(), iso(utcnow())
-    with queue.db.write() as conn:
-        conn.execute(
-            "INSERT INTO analysis_jobs (id, encounter_id, patient_id, input_digest, request, state, priority,"
-            " max_attempts, next_attempt_at, pictures, created_at, created_by, user_id) VALUES"
-            " (?,?,?,?,?,'queued',?,?,?,6,?,'dr','u1')",
-            (
-                job_id,
-                encounter or uuid7(),
-                "p1",
-                job_id,
-                msgspec.json.encode(JobInputs(pictures=[])).decode(),
-                priority,
-                queue.conf.max_attempts,
-                now,
-                now,
-            ),
-        )
+    """A job queued as the analysis service queues one (the service itself is tested through the API)."""
+    job_id, _ = queue.enqueue(
+        encounter_id=encounter or uuid7(),
+        patient_id="p1",
+        input_digest=uuid7(),
+        inputs=JobInputs(pictures=[]),
+        mode=EncounterMode.emergency if priority == 0 else EncounterMode.consultation,
+        created_by="dr",
+        user_id="u1",
+    )
     time.sleep(0.002)  # distinct created_at
     return job_id
 

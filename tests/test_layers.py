@@ -17,7 +17,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.conftest import REPO
+from harness.processes import REPO
 
 LAYERS = {"schemas": 0, "base": 1, "processing": 2, "sync": 2, "gateway": 3, "center": 3, "burnedge": 4}
 """Each top-level package's layer; a module imports only from its own package or from a lower layer."""

@@ -19,6 +19,7 @@ from scipy import ndimage, stats
 
 from benchmarks.healing_track import eval_skin, rms_apart, to_world
 from burnedge.cli import main as cli_main
+from harness.processes import REPO
 from processing.longitudinal import healing, registration, track
 from processing.phantom.generate import run_series
 from processing.stages import write_json
@@ -28,7 +29,6 @@ from schemas.errors import InvalidInput
 from schemas.longitudinal import TrackResult
 from schemas.phantom import PhantomSpec
 from schemas.reconstruction import FailureCode
-from tests.conftest import REPO
 
 CONF = TrackingConfig()
 

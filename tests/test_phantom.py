@@ -18,6 +18,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
+from harness.processes import REPO
 from processing.phantom.burn import Burn, random_outline
 from processing.phantom.generate import Stream, place_burn, run, run_series, stream
 from processing.phantom.meshing import edge_lengths, triangle_areas
@@ -26,7 +27,7 @@ from processing.phantom.surfaces import make_surface
 from processing.phantom.truth import cross_checks, fine_mesh, quadrature, size_burn
 from schemas.errors import InvalidInput
 from schemas.phantom import PHANTOM_FORMAT, BurnLook, PhantomShape, PhantomSpec, PhantomTruth
-from tests.conftest import REPO, SHARED
+from tests.conftest import SHARED
 
 SPEC = PhantomSpec(views=6, width=640, height=480, seed=7, depth_mm=2.5)
 FIGURES = [

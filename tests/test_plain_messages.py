@@ -10,8 +10,8 @@ import sys
 
 import pytest
 
+from harness.processes import REPO
 from schemas.errors import plain
-from tests.conftest import REPO
 from tests.test_uploads import enc, upload  # noqa: F401 (enc is a fixture)
 
 INTERNALS = re.compile(r"object at 0x|Errno|Traceback|File \"")

@@ -16,7 +16,7 @@ from collections.abc import Iterator
 
 import pytest
 
-from tests.poor_link import NS_PREFIX, NetnsError, NetnsLink, ThrottlingProxy
+from harness.poor_link import NS_PREFIX, NetnsError, NetnsLink, ThrottlingProxy
 
 RATE_KBIT = 256
 UP_BYTES = 96 * 1024  # ~3 s at 256 kbit/s

@@ -9,11 +9,12 @@ import sys
 import cv2
 import pytest
 
+from harness.processes import REPO
 from processing.capture.quality import gate_bytes
 from schemas.capture import QualityReason as Q
 from schemas.config import QualityGateConfig
 from tests.capture_images import exposed, heic, jpeg, png_bomb, scene
-from tests.conftest import REPO, SHARED
+from tests.conftest import SHARED
 
 CONFIG = QualityGateConfig()
 

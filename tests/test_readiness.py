@@ -9,12 +9,13 @@ import cv2
 import numpy as np
 import pytest
 
+from harness.bodies import encounter_body, patient_body
 from processing.capture.quality import gate_bytes, gate_file
 from processing.capture.readiness import FULL_FRAME_DIAGONAL_MM, View, assess, pose_errors, viewing_direction
 from schemas.capture import MarkerSighting, QualityFigures, QualityVerdict
 from schemas.config import QualityGateConfig, ReadinessConfig
 from tests.capture_images import jpeg, scene
-from tests.conftest import SHARED, encounter_body, patient_body
+from tests.conftest import SHARED
 from tests.test_uploads import upload
 
 GATE, READY = QualityGateConfig(), ReadinessConfig()

@@ -16,6 +16,7 @@ import pycolmap
 import pytest
 import trimesh
 
+from harness.processes import REPO
 from processing.capture.marker import find_markers
 from processing.phantom.generate import run as render_phantom
 from processing.reconstruction import pipeline, scale
@@ -26,7 +27,7 @@ from schemas.config import Config
 from schemas.errors import CaptureInsufficient
 from schemas.phantom import PhantomShape, PhantomSpec
 from schemas.reconstruction import FailureCode, Outcome, ReconstructionReport, RulerMark, RulerPoints, ScaleSource
-from tests.conftest import REPO, SHARED
+from tests.conftest import SHARED
 from tests.phantom_helpers import hide_marker
 
 SMALL = {"views": 8, "width": 960, "height": 720}

@@ -6,8 +6,8 @@ import datetime as dt
 
 import pytest
 
+from harness.bodies import encounter_body, now, patient_body
 from schemas.ids import uuid7
-from tests.conftest import encounter_body, now, patient_body
 
 PROBLEM = "application/problem+json"
 

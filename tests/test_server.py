@@ -8,7 +8,8 @@ import sys
 import httpx
 import pytest
 
-from tests.conftest import PASSWORD, REPO, add_user_cli, encounter_body, patient_body
+from harness.bodies import encounter_body, patient_body
+from harness.processes import PASSWORD, REPO, add_user_cli
 
 pytestmark = pytest.mark.server
 

@@ -11,11 +11,11 @@ import pytest
 from base.accounts.permissions import Principal
 from base.storage import audit
 from gateway.storage.database import Database
+from harness.bodies import patient_body
 from schemas.accounts import Role
 from schemas.errors import StorageError, VersionMismatch
 from schemas.ids import uuid7
 from schemas.records import RecordKind
-from tests.conftest import patient_body
 
 CLINICIAN = Principal("u1", "dr.a", Role.clinician, None, "h")
 

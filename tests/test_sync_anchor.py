@@ -8,9 +8,9 @@ import sqlite3
 
 import pytest
 
+from harness.bodies import patient_body
+from harness.sites import CLINIC, Sites, cli, wait_for
 from sync.anchor import ANCHOR_FILE
-from tests.conftest import patient_body
-from tests.sync_sites import CLINIC, Sites, cli, wait_for
 from tests.test_audit import _cli
 
 pytestmark = pytest.mark.server

@@ -7,8 +7,8 @@ from pathlib import Path
 
 import pytest
 
-from tests.conftest import free_port
-from tests.sync_sites import Sites, noise_photo, record_case, wait_for
+from harness.processes import free_port
+from harness.sites import Sites, noise_photo, record_case, wait_for
 
 pytestmark = pytest.mark.server
 
@@ -90,7 +90,7 @@ def sent_chunks(client, encounter_id: str) -> int:
 
 
 def test_sigkill_of_either_side_mid_transfer_still_stores_each_bundle_once(tmp_path: Path):
-    from tests.poor_link import ThrottlingProxy
+    from harness.poor_link import ThrottlingProxy
 
     zenoh_port = free_port()
     with ThrottlingProxy("127.0.0.1", zenoh_port, rate_kbit=4000) as proxy:  # ~1 s per 0.5 MB: time to kill

@@ -13,6 +13,7 @@ import msgspec
 import pytest
 import zenoh
 
+from harness.sites import CENTER, CLINIC, Sites, cli
 from schemas.transfer import (
     PROTOCOL,
     AnnounceReply,
@@ -29,7 +30,6 @@ from sync.keys import SiteKeys, init_keys, load_keys
 from sync.sealing import seal
 from sync.wire import request
 from sync.zenoh_link import Keys
-from tests.sync_sites import CENTER, CLINIC, Sites, cli
 
 pytestmark = pytest.mark.server
 SUMMARY = CaseSummary(

@@ -18,12 +18,13 @@ import sqlite_utils
 from litestar.testing import TestClient
 
 from center.app import CentralServices, create_central_app
-from center.migrations import central_migrations
+from center.storage.migrations import central_migrations
 from gateway.app import create_app
 from gateway.storage.database import Database
 from gateway.storage.migrations import migrations
+from harness.processes import FAST_HASH_ENV, REPO, login
 from schemas.config import CentralConfig, Config, GatewayConfig
-from tests.conftest import FAST_HASH_ENV, FAST_SECURITY, REPO, login
+from tests.conftest import FAST_SECURITY
 
 FIXTURES = Path(__file__).parent / "fixtures" / "upgrade"
 Snapshot = dict[str, tuple[list[str], Counter]]

@@ -8,9 +8,9 @@ import os
 
 import pytest
 
+from harness.bodies import encounter_body, patient_body
 from schemas.ids import uuid7
 from tests.capture_images import heic, jpeg, jpeg_with_exif, png_bomb, scene, video
-from tests.conftest import encounter_body, patient_body
 
 TUS = {"Tus-Resumable": "1.0.0"}
 OCTETS = {"Content-Type": "application/offset+octet-stream"}
@@ -285,8 +285,9 @@ def test_nothing_can_touch_an_upload_while_it_completes(client, auth, enc, servi
 
 
 def test_an_upload_belongs_to_its_sender_or_their_phone(client, auth, enc, services):
+    from harness.processes import login
     from schemas.accounts import Role
-    from tests.conftest import login, make_user
+    from tests.conftest import make_user
 
     make_user(services, "nurse.two", Role.nurse)
     other = login(client, "nurse.two")

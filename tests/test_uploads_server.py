@@ -15,8 +15,9 @@ from tusclient.client import TusClient
 from tusclient.storage.filestorage import FileStorage
 from tusclient.uploader import Uploader
 
+from harness.bodies import encounter_body, patient_body
+from harness.processes import PASSWORD, add_user_cli
 from tests.capture_images import jpeg, pad_mp4, scene, video
-from tests.conftest import PASSWORD, add_user_cli, encounter_body, patient_body
 
 pytestmark = pytest.mark.server
 MB = 1024 * 1024

@@ -17,6 +17,7 @@ import msgspec
 from schemas.base import iso, utcnow
 from schemas.errors import NotFound
 from schemas.records import Record, RecordKind, RecordMeta
+from schemas.sync import MutationResult
 
 _COLUMNS = (
     "v.seq, v.kind, v.id, v.version, v.parent_id, v.data, v.deleted, v.delete_reason, "
@@ -162,3 +163,52 @@ def changes_since(conn: sqlite3.Connection, cursor: int, limit: int, kinds: Iter
         [cursor, *wanted, limit],
     )
     return [row_to_record(r) for r in rows]
+
+
+class EncounterPhoto(msgspec.Struct, frozen=True, kw_only=True):
+    """A photo stored for an encounter, as far as sending it needs: which blob holds it and its media type."""
+
+    id: str
+    sha256: str
+    """Of the bytes: the name of the blob in the media store."""
+    media_type: str
+
+
+def encounter_photos(conn: sqlite3.Connection, encounter_id: str, limit: int) -> list[EncounterPhoto]:
+    """The encounter's photos in the order they were taken in (up to `limit`), not its videos or frames."""
+    rows = conn.execute(
+        "SELECT id, sha256, media_type FROM assets WHERE encounter_id = ? AND kind = 'photo'"
+        " ORDER BY created_at, id LIMIT ?",
+        (encounter_id, limit),
+    ).fetchall()
+    return [EncounterPhoto(id=r["id"], sha256=r["sha256"], media_type=r["media_type"]) for r in rows]
+
+
+class AppliedMutation(msgspec.Struct, frozen=True, kw_only=True):
+    """A phone's mutation the gateway already applied, remembered so that a retried push gets the same answer."""
+
+    fingerprint: str
+    """What made it this mutation (everything but the phone's clock), to tell a reused mutation_id."""
+    result: MutationResult
+    """The answer the phone was given."""
+
+
+_mutation_result = msgspec.json.Decoder(MutationResult)
+
+
+def find_applied_mutation(conn: sqlite3.Connection, mutation_id: str) -> AppliedMutation | None:
+    """The stored outcome of this mutation_id, or None when no mutation with it was applied yet."""
+    row = conn.execute(
+        "SELECT fingerprint, result FROM applied_mutations WHERE mutation_id = ?", (mutation_id,)
+    ).fetchone()
+    if row is None:
+        return None
+    return AppliedMutation(fingerprint=row["fingerprint"], result=_mutation_result.decode(row["result"]))
+
+
+def remember_applied_mutation(conn: sqlite3.Connection, result: MutationResult, fingerprint: str, user_id: str) -> None:
+    """Store an applied mutation's outcome, in the savepoint that applied it."""
+    conn.execute(
+        "INSERT INTO applied_mutations (mutation_id, fingerprint, result, applied_at, user_id) VALUES (?,?,?,?,?)",
+        (result.mutation_id, fingerprint, msgspec.json.encode(result).decode(), iso(utcnow()), user_id),
+    )

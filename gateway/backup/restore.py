@@ -10,20 +10,19 @@ from __future__ import annotations
 
 import os
 import shutil
-import sqlite3
 import uuid
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from base.storage import audit
 from base.storage.durable import fsync_dir
 from gateway.backup import archive
 from gateway.backup.crypto import FileKey
 from gateway.backup.restored_config import FOLDERS, render
 from gateway.backup.stream import DecryptingReader, read_header
+from gateway.storage import backup_copy
 from schemas.backup import BackupHeader, BackupManifest
-from schemas.errors import Conflict, InvalidInput, NotFound
+from schemas.errors import Conflict, InvalidInput, NotFound, StorageError
 
 CONFIG_FILE = "burnedge.toml"
 MAX_MANIFEST = 512 * 1024**2
@@ -147,18 +146,15 @@ def _write(target: Path, stream, sha256: str | None, path: Path) -> int:
 
 
 def _check_database(database: Path, manifest: BackupManifest) -> None:
-    conn = sqlite3.connect(database)
-    conn.row_factory = sqlite3.Row
     try:
-        result = conn.execute("PRAGMA quick_check").fetchone()[0]
-        head = audit.head(conn)
-    except sqlite3.DatabaseError as exc:
-        raise InvalidInput(f"the backed-up database does not open ({exc}); use another copy") from exc
-    finally:
-        conn.close()
-    if result != "ok":
-        raise InvalidInput(f"the backed-up database fails SQLite's integrity check ({result}); use another copy")
-    if head != manifest.audit_head:
+        found = backup_copy.check_copy(database)
+    except StorageError as exc:
+        raise InvalidInput(f"the backed-up database does not open ({exc.detail}); use another copy") from exc
+    if found.integrity != "ok":
+        raise InvalidInput(
+            f"the backed-up database fails SQLite's integrity check ({found.integrity}); use another copy"
+        )
+    if found.audit_head != manifest.audit_head:
         raise InvalidInput(
             "the backed-up database's last audit entry is not the one its manifest names; use another copy"
         )

@@ -16,7 +16,6 @@ from __future__ import annotations
 import fcntl
 import json
 import shutil
-import sqlite3
 import tempfile
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -24,11 +23,10 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from base.folders import keys_dir, media_root, outbox_root, work_root
-from base.storage import audit
 from gateway.jobs.folders import SCRATCH
+from gateway.storage import backup_copy
 from schemas.audit import AuditHead
 from schemas.config import Config
-from schemas.errors import NotFound, StorageError
 from sync.keys import PUBLIC_FILE
 
 STAGING_PREFIX = ".burnedge-backup-"
@@ -75,26 +73,6 @@ def read_keys(folder: Path) -> dict[str, bytes]:
     return {p.name: p.read_bytes() for p in sorted(folder.iterdir()) if p.is_file() and not p.name.endswith(".tmp")}
 
 
-def copy_database(source: Path, target: Path) -> None:
-    """One-step online backup into a single self-contained file (journal mode DELETE, no -wal beside it)."""
-    if not source.is_file():
-        raise NotFound(f"no database at {source}: check [gateway] database or --db")
-    try:
-        src = sqlite3.connect(source, timeout=30)
-        dst = sqlite3.connect(target)
-        try:
-            src.backup(dst)  # pages=-1: all pages under one read transaction, the same moment throughout
-            dst.execute("PRAGMA journal_mode = DELETE")
-            check = dst.execute("PRAGMA quick_check").fetchone()[0]
-        finally:
-            dst.close()
-            src.close()
-    except sqlite3.DatabaseError as exc:
-        raise StorageError(f"could not copy the database {source}: {exc}") from exc
-    if check != "ok":
-        raise StorageError(f"the database {source} fails SQLite's integrity check ({check}): repair it first")
-
-
 @contextmanager
 def take(config: Config) -> Iterator[Snapshot]:
     """The snapshot, staged in a private folder beside the database (no less protected than the database); the
@@ -108,13 +86,8 @@ def take(config: Config) -> Iterator[Snapshot]:
     fcntl.flock(lock, fcntl.LOCK_EX)
     try:
         copy = staging / layout.database.name
-        copy_database(layout.database, copy)
-        conn = sqlite3.connect(copy)
-        conn.row_factory = sqlite3.Row
-        try:
-            yield _refer(conn, copy, layout, keys)
-        finally:
-            conn.close()
+        backup_copy.copy_database(layout.database, copy)
+        yield _refer(backup_copy.read_contents(copy), copy, layout, keys)
     finally:
         shutil.rmtree(staging, ignore_errors=True)
         lock.close()
@@ -131,35 +104,22 @@ def _remove_stale_staging(parent: Path) -> None:
             continue
 
 
-def _refer(conn: sqlite3.Connection, copy: Path, layout: StateLayout, keys: dict[str, bytes]) -> Snapshot:
-    tables = {r[0] for r in conn.execute("SELECT name FROM sqlite_master WHERE type = 'table'")}
-
-    def rows(sql: str, table: str) -> list[sqlite3.Row]:
-        return conn.execute(sql).fetchall() if table in tables else []
-
-    migrations = [
-        r["name"]
-        for r in rows(
-            "SELECT name FROM _sqlite_migrations WHERE migration_set = 'burnedge' ORDER BY id", "_sqlite_migrations"
-        )
-    ]
-    head = audit.head(conn) if "audit_log" in tables else None
+def _refer(contents: backup_copy.CopyContents, copy: Path, layout: StateLayout, keys: dict[str, bytes]) -> Snapshot:
     blobs = [
-        (f"media/blobs/{sha[:2]}/{sha}", layout.media / "blobs" / sha[:2] / sha, sha)
-        for (sha,) in rows("SELECT DISTINCT sha256 FROM assets ORDER BY sha256", "assets")
+        (f"media/blobs/{sha[:2]}/{sha}", layout.media / "blobs" / sha[:2] / sha, sha) for sha in contents.blob_sha256s
     ]
     files: list[tuple[str, Path]] = []
-    done = rows("SELECT id, patient_id FROM analysis_jobs WHERE state = 'done' ORDER BY id", "analysis_jobs")
-    for row in done:
-        files += _analysis_files(layout.analyses / row["id"], f"analyses/{row['id']}")
-    for patient in sorted({row["patient_id"] for row in done}):
+    done = contents.finished_analyses
+    for analysis in done:
+        files += _analysis_files(layout.analyses / analysis.id, f"analyses/{analysis.id}")
+    for patient in sorted({analysis.patient_id for analysis in done}):
         track = layout.analyses / "patients" / patient / "track.json"
         if track.is_file():  # the per-visit registrations beside it are a cache, rebuilt on the next analysis
             files.append((f"analyses/patients/{patient}/track.json", track))
     outbox = [
-        (f"outbox/{r['bundle_id']}/{i:06d}.chunk", layout.outbox / r["bundle_id"] / f"{i:06d}.chunk")
-        for r in rows("SELECT bundle_id, chunks FROM outbox WHERE state = 'queued' ORDER BY bundle_id", "outbox")
-        for i in range(r["chunks"])
+        (f"outbox/{b.bundle_id}/{i:06d}.chunk", layout.outbox / b.bundle_id / f"{i:06d}.chunk")
+        for b in contents.queued_bundles
+        for i in range(b.chunks)
     ]
     site_id = None
     if PUBLIC_FILE in keys:
@@ -169,8 +129,8 @@ def _refer(conn: sqlite3.Connection, copy: Path, layout: StateLayout, keys: dict
             site_id = None
     return Snapshot(
         database=copy,
-        audit_head=head,
-        migrations=migrations,
+        audit_head=contents.audit_head,
+        migrations=contents.migrations,
         site_id=site_id,
         keys=keys,
         blobs=blobs,

@@ -17,10 +17,12 @@ import shutil
 from pathlib import Path
 
 from base.folders import analysis_dir, job_dir, matching_files, media_root, patient_dir, work_root
+from gateway.storage import jobs
 from gateway.storage.database import Database
 from schemas.base import iso, utcnow
 from schemas.config import Config
 from schemas.errors import NotFound
+from schemas.jobs import JobState
 
 log = logging.getLogger("burnedge.jobs")
 
@@ -71,18 +73,10 @@ def artifact_file(config: Config, job_id: str, name: str) -> Path:
 def clean_up(db: Database, config: Config) -> int:
     """Apply the retention period to finished jobs' folders; returns how many were cleaned."""
     cutoff = iso(utcnow() - dt.timedelta(days=config.jobs.retention_days))
-    rows = (
-        db.connection()
-        .execute(
-            "SELECT id, state FROM analysis_jobs WHERE state IN ('done', 'failed', 'cancelled') AND finished_at < ?"
-            " AND cleaned_at IS NULL",
-            (cutoff,),
-        )
-        .fetchall()
-    )
-    for row in rows:
-        folder = job_dir(config, row["id"])
-        if row["state"] == "done":
+    expired = jobs.past_retention(db.connection(), cutoff)
+    for job in expired:
+        folder = job_dir(config, job.id)
+        if job.state is JobState.done:
             for part in SCRATCH:
                 path = folder / part
                 if path.is_dir():
@@ -92,14 +86,14 @@ def clean_up(db: Database, config: Config) -> int:
         else:
             shutil.rmtree(folder, ignore_errors=True)
         with db.write() as conn:
-            conn.execute("UPDATE analysis_jobs SET cleaned_at = ? WHERE id = ?", (iso(utcnow()), row["id"]))
+            jobs.mark_cleaned(conn, job.id, iso(utcnow()))
         log.info(
             "analysis %s (%s): work files past the %g-day retention removed",
-            row["id"],
-            row["state"],
+            job.id,
+            job.state.value,
             config.jobs.retention_days,
         )
-    return len(rows)
+    return len(expired)
 
 
 _SITE_PACKAGES = re.compile(r"(?:/[^\s\"':]+)+/site-packages/")

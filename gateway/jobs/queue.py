@@ -1,4 +1,5 @@
-"""The durable analysis queue: rows in the gateway's SQLite file, moved between states in short transactions.
+"""The durable analysis queue: rows in the gateway's SQLite file (gateway/storage/jobs.py), moved between
+states in short transactions.
 
 Workers claim the most urgent queued job (emergency before consultation, then oldest) and hold it under a
 lease they renew. A job whose lease ran out (its worker was killed, the power went) is queued again, with
@@ -16,11 +17,14 @@ from dataclasses import dataclass
 import msgspec
 
 from gateway.jobs import attempts
+from gateway.storage import jobs
 from gateway.storage.database import Database
 from schemas.base import iso, utcnow
 from schemas.config import JobsConfig
-from schemas.errors import Conflict, NotFound
-from schemas.jobs import FINISHED, AnalysisJob, AttemptOutcome, CaptureTime, JobAttempt, JobState
+from schemas.errors import Conflict
+from schemas.ids import uuid7
+from schemas.jobs import FINISHED, AnalysisJob, AttemptOutcome, JobAttempt, JobInputs, JobState, StoredJob
+from schemas.patient import EncounterMode
 
 WORKER_DIED = "lost its worker (killed, power cut or out of memory)"
 _ENDED = {
@@ -66,54 +70,108 @@ class JobQueue:
         delay = min(self.conf.retry_max_s, self.conf.retry_base_s * 2 ** max(attempts - 1, 0))
         return delay * (1 + random.uniform(0, 0.2))
 
+    # enqueueing ------------------------------------------------------------------------------------------
+    def enqueue(
+        self,
+        *,
+        encounter_id: str,
+        patient_id: str,
+        input_digest: str,
+        inputs: JobInputs,
+        mode: EncounterMode,
+        created_by: str,
+        user_id: str,
+    ) -> tuple[str, bool]:
+        """`enqueue_in` in a transaction of its own."""
+        with self.db.write() as conn:
+            return self.enqueue_in(
+                conn,
+                encounter_id=encounter_id,
+                patient_id=patient_id,
+                input_digest=input_digest,
+                inputs=inputs,
+                mode=mode,
+                created_by=created_by,
+                user_id=user_id,
+            )
+
+    def enqueue_in(
+        self,
+        conn: sqlite3.Connection,
+        *,
+        encounter_id: str,
+        patient_id: str,
+        input_digest: str,
+        inputs: JobInputs,
+        mode: EncounterMode,
+        created_by: str,
+        user_id: str,
+    ) -> tuple[str, bool]:
+        """Queue an analysis of the encounter inside the caller's transaction, once: while a job of the same
+        inputs (`input_digest`) is queued, running or done, that job is the answer. An emergency runs before
+        consultations; the job and its inputs' `requested_at` are stamped now.
+
+        Returns the job's id and whether it was created now.
+        """
+        existing = jobs.find_live(conn, encounter_id, input_digest)
+        if existing is not None:
+            return existing.id, False
+        now = _at(_now())
+        job = StoredJob(
+            id=uuid7(),
+            encounter_id=encounter_id,
+            patient_id=patient_id,
+            input_digest=input_digest,
+            state=JobState.queued,
+            priority=0 if mode is EncounterMode.emergency else 1,
+            max_attempts=self.conf.max_attempts,
+            next_attempt_at=now,
+            pictures=len(inputs.pictures),
+            created_at=now,
+            created_by=created_by,
+            user_id=user_id,
+            message="waiting for a worker",
+            captured=inputs.captured,
+        )
+        jobs.insert(conn, job, msgspec.structs.replace(inputs, requested_at=now))
+        return job.id, True
+
     # workers ---------------------------------------------------------------------------------------------
     def claim(self, owner: str) -> Claim | None:
         """Take the most urgent job that may run now; None when there is none."""
         now = _now()
         with self.db.write() as conn:
             self._reap(conn, now)
-            row = conn.execute(
-                "SELECT id, attempts, stage FROM analysis_jobs WHERE state = 'queued' AND next_attempt_at <= ?"
-                " ORDER BY priority, created_at LIMIT 1",
-                (_at(now),),
-            ).fetchone()
-            if row is None:
+            job = jobs.next_due(conn, _at(now))
+            if job is None:
                 return None
-            conn.execute(
-                "UPDATE analysis_jobs SET state = 'running', lease_owner = ?, lease_expires_at = ?,"
-                " attempts = attempts + 1, started_at = COALESCE(started_at, ?), message = ? WHERE id = ?",
-                (
-                    owner,
-                    _at(now + dt.timedelta(seconds=self.conf.lease_s)),
-                    _at(now),
-                    f"starting (try {row['attempts'] + 1} of {self.conf.max_attempts})",
-                    row["id"],
-                ),
+            attempt = job.attempts + 1
+            jobs.start(
+                conn,
+                job.id,
+                owner,
+                lease_expires_at=_at(now + dt.timedelta(seconds=self.conf.lease_s)),
+                at=_at(now),
+                message=f"starting (try {attempt} of {self.conf.max_attempts})",
             )
-            attempts.begin(conn, row["id"], row["attempts"] + 1, _at(now), row["stage"])
-            return Claim(row["id"], owner, row["attempts"] + 1)
+            attempts.begin(conn, job.id, attempt, _at(now), job.stage)
+            return Claim(job.id, owner, attempt)
 
     def heartbeat(self, claim: Claim) -> Beat:
         with self.db.write() as conn:
-            row = conn.execute(
-                "SELECT state, lease_owner, cancel_requested FROM analysis_jobs WHERE id = ?", (claim.job_id,)
-            ).fetchone()
-            if row is None or row["state"] != JobState.running or row["lease_owner"] != claim.owner:
+            job = jobs.find(conn, claim.job_id)
+            if job is None or job.state is not JobState.running or job.lease_owner != claim.owner:
                 # Only a stored result lets the process run on (it updates the healing track); a job cancelled or
                 # failed by the reaper meanwhile must be stopped.
-                return Beat(owned=False, cancel=False, finished=row is not None and row["state"] == JobState.done)
-            expires = _at(_now() + dt.timedelta(seconds=self.conf.lease_s))
-            conn.execute("UPDATE analysis_jobs SET lease_expires_at = ? WHERE id = ?", (expires, claim.job_id))
-            return Beat(owned=True, cancel=bool(row["cancel_requested"]))
+                return Beat(owned=False, cancel=False, finished=job is not None and job.state is JobState.done)
+            jobs.renew_lease(conn, claim.job_id, _at(_now() + dt.timedelta(seconds=self.conf.lease_s)))
+            return Beat(owned=True, cancel=job.cancel_requested)
 
     def progress(self, claim: Claim, stage: str, fraction: float, message: str) -> bool:
         with self.db.write() as conn:
-            cur = conn.execute(
-                "UPDATE analysis_jobs SET stage = ?, fraction = ?, message = ? WHERE id = ? AND state = 'running'"
-                " AND lease_owner = ?",
-                (stage, round(min(max(fraction, 0.0), 1.0), 4), message, claim.job_id, claim.owner),
+            return jobs.set_progress(
+                conn, claim.job_id, claim.owner, stage, round(min(max(fraction, 0.0), 1.0), 4), message
             )
-            return cur.rowcount == 1
 
     def finish_in(
         self,
@@ -126,16 +184,19 @@ class JobQueue:
         message: str,
     ) -> bool:
         """Close the job inside the caller's transaction; False (nothing written) if the worker lost it."""
-        cur = conn.execute(
-            "UPDATE analysis_jobs SET state = ?, result_status = ?, error = ?, message = ?, finished_at = ?,"
-            " fraction = CASE WHEN ? = 'done' THEN 1.0 ELSE fraction END, lease_owner = NULL, lease_expires_at = NULL"
-            " WHERE id = ? AND state = 'running' AND lease_owner = ? RETURNING stage",
-            (state.value, result_status, error, message, _at(_now()), state.value, claim.job_id, claim.owner),
+        closed = jobs.close(
+            conn,
+            claim.job_id,
+            claim.owner,
+            state,
+            result_status=result_status,
+            error=error,
+            message=message,
+            at=_at(_now()),
         )
-        closed = cur.fetchone()
         if closed is None:
             return False
-        attempts.end(conn, claim.job_id, _ENDED[state], _at(_now()), stage=closed["stage"], reason=error or message)
+        attempts.end(conn, claim.job_id, _ENDED[state], _at(_now()), stage=closed.stage, reason=error or message)
         return True
 
     def finish(self, claim: Claim, state: JobState, *, error: str | None, message: str) -> bool:
@@ -154,66 +215,58 @@ class JobQueue:
         """After a crash of this try: queue it again with backoff, or fail it when the tries are used up.
         `reason` completes 'try 2 ...', e.g. 'ended by SIGSEGV'."""
         with self.db.write() as conn:
-            row = conn.execute(
-                "SELECT attempts, max_attempts, cancel_requested, stage FROM analysis_jobs WHERE id = ?"
-                " AND state = 'running' AND lease_owner = ?",
-                (claim.job_id, claim.owner),
-            ).fetchone()
-            if row is None:
+            job = jobs.held(conn, claim.job_id, claim.owner)
+            if job is None:
                 return JobState.running  # lost meanwhile: its new holder decides
-            return self._after_try(conn, claim.job_id, row, reason, _now(), outcome, exit, log_tail)
+            return self._after_try(conn, job, reason, _now(), outcome, exit, log_tail)
 
     def _after_try(
         self,
-        conn,
-        job_id: str,
-        row,
+        conn: sqlite3.Connection,
+        job: StoredJob,
         reason: str,
         now: dt.datetime,
         outcome: AttemptOutcome = AttemptOutcome.lost,
         exit: str = "",
         log_tail: str = "",
     ) -> JobState:
-        stage = row["stage"]
-        ended = attempts.ended(row["attempts"], reason, stage)
-        attempts.end(conn, job_id, outcome, _at(now), stage=stage, reason=reason, exit=exit, log_tail=log_tail)
-        if row["cancel_requested"]:
+        stage = job.stage
+        ended = attempts.ended(job.attempts, reason, stage)
+        attempts.end(conn, job.id, outcome, _at(now), stage=stage, reason=reason, exit=exit, log_tail=log_tail)
+        if job.cancel_requested:
             state, error, when, message = JobState.cancelled, None, now, "cancelled"
-        elif row["attempts"] >= row["max_attempts"]:
+        elif job.attempts >= job.max_attempts:
             state, when, message = JobState.failed, now, "failed"
             error = (
-                f"the analysis failed {row['attempts']} times; the last time: {ended}. The pictures are kept: "
-                f"ask your IT contact to look at the gateway's log and /api/v1/analyses/{job_id}/attempts"
+                f"the analysis failed {job.attempts} times; the last time: {ended}. The pictures are kept: "
+                f"ask your IT contact to look at the gateway's log and /api/v1/analyses/{job.id}/attempts"
             )
         else:
             state, error = JobState.queued, ended
-            when = now + dt.timedelta(seconds=self.backoff_s(row["attempts"]))
+            when = now + dt.timedelta(seconds=self.backoff_s(job.attempts))
             message = f"{ended}; retrying from {stage or 'the start'}"
-        conn.execute(
-            "UPDATE analysis_jobs SET state = ?, error = ?, next_attempt_at = ?, lease_owner = NULL,"
-            " lease_expires_at = NULL, finished_at = ?, message = ? WHERE id = ?",
-            (state.value, error, _at(when), _at(now) if state in FINISHED else None, message, job_id),
+        jobs.settle_try(
+            conn,
+            job.id,
+            state,
+            error=error,
+            next_attempt_at=_at(when),
+            finished_at=_at(now) if state in FINISHED else None,
+            message=message,
         )
         return state
 
     def release(self, claim: Claim) -> None:
         """Hand a job back unfinished because its worker is stopping: queued at once, the try not counted."""
         with self.db.write() as conn:
-            row = conn.execute(
-                "UPDATE analysis_jobs SET state = CASE WHEN cancel_requested THEN 'cancelled' ELSE 'queued' END,"
-                " attempts = max(attempts - 1, 0), next_attempt_at = ?, lease_owner = NULL, lease_expires_at = NULL,"
-                " message = CASE WHEN cancel_requested THEN 'cancelled' ELSE 'waiting: the worker was stopped' END,"
-                " finished_at = CASE WHEN cancel_requested THEN ? END WHERE id = ? AND state = 'running'"
-                " AND lease_owner = ? RETURNING stage",
-                (_at(_now()), _at(_now()), claim.job_id, claim.owner),
-            ).fetchone()
-            if row is not None:  # still this worker's try (a lost lease's try is closed by whoever took it over)
+            job = jobs.hand_back(conn, claim.job_id, claim.owner, _at(_now()))
+            if job is not None:  # still this worker's try (a lost lease's try is closed by whoever took it over)
                 attempts.end(
                     conn,
                     claim.job_id,
                     AttemptOutcome.handed_back,
                     _at(_now()),
-                    stage=row["stage"],
+                    stage=job.stage,
                     reason="was handed back: its worker was stopping",
                 )
 
@@ -223,100 +276,79 @@ class JobQueue:
         with self.db.write() as conn:
             return self._reap(conn, _now())
 
-    def _reap(self, conn, now: dt.datetime) -> int:
-        rows = conn.execute(
-            "SELECT id, attempts, max_attempts, cancel_requested, stage FROM analysis_jobs WHERE state = 'running'"
-            " AND lease_expires_at < ?",
-            (_at(now),),
-        ).fetchall()
-        for row in rows:
-            self._after_try(conn, row["id"], row, WORKER_DIED, now)
-        return len(rows)
+    def _reap(self, conn: sqlite3.Connection, now: dt.datetime) -> int:
+        expired = jobs.lease_expired(conn, _at(now))
+        for job in expired:
+            self._after_try(conn, job, WORKER_DIED, now)
+        return len(expired)
 
     def cancel(self, job_id: str) -> JobState:
         """A queued job is cancelled at once; a running one when its worker next beats (a few seconds)."""
         with self.db.write() as conn:
-            row = conn.execute("SELECT state FROM analysis_jobs WHERE id = ?", (job_id,)).fetchone()
-            if row is None:
-                raise NotFound(f"no analysis {job_id}")
-            state = JobState(row["state"])
+            state = jobs.get(conn, job_id).state
             if state in FINISHED:
                 if state is JobState.cancelled:
                     return state
                 raise Conflict(f"the analysis is already {state.value}; nothing to cancel")
             if state is JobState.queued:
-                conn.execute(
-                    "UPDATE analysis_jobs SET state = 'cancelled', cancel_requested = 1, finished_at = ?,"
-                    " message = 'cancelled' WHERE id = ?",
-                    (_at(_now()), job_id),
-                )
+                jobs.cancel_queued(conn, job_id, _at(_now()))
                 return JobState.cancelled
-            conn.execute(
-                "UPDATE analysis_jobs SET cancel_requested = 1, message = 'cancelling' WHERE id = ?", (job_id,)
-            )
+            jobs.request_cancel(conn, job_id)
             return JobState.running
 
     # reads ---------------------------------------------------------------------------------------------------
     def get(self, job_id: str) -> AnalysisJob:
         with self.db.read() as conn:
-            row = conn.execute("SELECT * FROM analysis_jobs WHERE id = ?", (job_id,)).fetchone()
-            if row is None:
-                raise NotFound(f"no analysis {job_id}")
-            return job_from_row(row, _position(conn, row), attempts.summaries(conn, job_id))
+            job = jobs.get(conn, job_id)
+            return analysis_job(job, _position(conn, job), attempts.summaries(conn, job_id))
 
     def for_encounter(self, encounter_id: str) -> list[AnalysisJob]:
         with self.db.read() as conn:
-            rows = conn.execute(
-                "SELECT * FROM analysis_jobs WHERE encounter_id = ? ORDER BY created_at", (encounter_id,)
-            ).fetchall()
-            return [job_from_row(r, _position(conn, r), attempts.summaries(conn, r["id"])) for r in rows]
+            return [
+                analysis_job(j, _position(conn, j), attempts.summaries(conn, j.id))
+                for j in jobs.for_encounter(conn, encounter_id)
+            ]
 
     def attempt_history(self, job_id: str) -> list[JobAttempt]:
         """Every try of the job, oldest first."""
         with self.db.read() as conn:
-            if conn.execute("SELECT 1 FROM analysis_jobs WHERE id = ?", (job_id,)).fetchone() is None:
-                raise NotFound(f"no analysis {job_id}")
+            jobs.get(conn, job_id)
             return attempts.history(conn, job_id)
 
     def live_states(self) -> dict[str, int]:
-        rows = self.db.connection().execute("SELECT state, count(*) AS n FROM analysis_jobs GROUP BY state")
-        return {r["state"]: r["n"] for r in rows}
+        return jobs.count_by_state(self.db.connection())
 
 
-def _position(conn, row) -> int | None:
-    if row["state"] != JobState.queued:
+def _position(conn: sqlite3.Connection, job: StoredJob) -> int | None:
+    if job.state is not JobState.queued:
         return None
-    ahead = conn.execute(
-        "SELECT count(*) FROM analysis_jobs WHERE state = 'queued' AND (priority < ? OR (priority = ? AND"
-        " created_at < ?))",
-        (row["priority"], row["priority"], row["created_at"]),
-    ).fetchone()[0]
-    return ahead + 1
+    return jobs.queued_ahead(conn, job) + 1
 
 
-def job_from_row(row, position: int | None = None, history: list[str] | None = None) -> AnalysisJob:
-    state = JobState(row["state"])
+def analysis_job(job: StoredJob, position: int | None = None, history: list[str] | None = None) -> AnalysisJob:
+    """What the API shows of a stored job: a retry's time only while it waits, its place in the queue and how its
+    earlier tries ended."""
     return AnalysisJob(
-        id=row["id"],
-        encounter_id=row["encounter_id"],
-        patient_id=row["patient_id"],
-        state=state,
-        priority=row["priority"],
-        stage=row["stage"],
-        fraction=row["fraction"],
-        message=row["message"],
-        attempts=row["attempts"],
-        max_attempts=row["max_attempts"],
-        next_attempt_at=row["next_attempt_at"] if state is JobState.queued else None,
-        error=row["error"],
-        cancel_requested=bool(row["cancel_requested"]),
-        pictures=row["pictures"],
-        created_at=row["created_at"],
-        created_by=row["created_by"],
-        started_at=row["started_at"],
-        finished_at=row["finished_at"],
+        id=job.id,
+        encounter_id=job.encounter_id,
+        patient_id=job.patient_id,
+        state=job.state,
+        priority=job.priority,
+        stage=job.stage,
+        fraction=job.fraction,
+        message=job.message,
+        attempts=job.attempts,
+        max_attempts=job.max_attempts,
+        next_attempt_at=job.next_attempt_at if job.state is JobState.queued else None,
+        error=job.error,
+        cancel_requested=job.cancel_requested,
+        pictures=job.pictures,
+        created_at=job.created_at,
+        created_by=job.created_by,
+        started_at=job.started_at,
+        finished_at=job.finished_at,
         queue_position=position,
-        result_status=row["result_status"],
+        result_status=job.result_status,
         history=history or [],
-        captured=msgspec.json.decode(row["captured"], type=CaptureTime) if row["captured"] else None,
+        captured=job.captured,
     )

@@ -28,6 +28,7 @@ from gateway.jobs import folders
 from gateway.jobs.capture_time import hours_since_injury
 from gateway.jobs.queue import Claim, JobQueue
 from gateway.jobs.timeline import update_track
+from gateway.storage import jobs
 from gateway.storage.database import Database
 from processing.analysis.pipeline import Patient
 from processing.analysis.pipeline import run as analyze
@@ -36,7 +37,7 @@ from schemas.analysis import AnalysisResult, AnalysisStatus
 from schemas.base import iso, utcnow
 from schemas.config import Config
 from schemas.errors import BurnedgeError, StorageError
-from schemas.jobs import BurnAnalysis, JobInputs, JobState
+from schemas.jobs import BurnAnalysis, JobInputs, JobState, StoredJob
 from schemas.reconstruction import RulerMark, RulerPoints
 from schemas.records import RecordKind
 
@@ -59,11 +60,11 @@ def run(config: Config, claim: Claim) -> JobState:
     db = Database.from_config(config.gateway)
     queue = JobQueue(db, config.jobs)
     try:
-        row = db.connection().execute("SELECT * FROM analysis_jobs WHERE id = ?", (claim.job_id,)).fetchone()
-        inputs = msgspec.json.decode(row["request"], type=JobInputs)
+        job = jobs.get(db.connection(), claim.job_id)
+        inputs = jobs.inputs(db.connection(), claim.job_id)
         folder = folders.job_dir(config, claim.job_id)
         source, masks, ruler = _lay_out(config, folder, inputs)
-        patient = _patient(db, row["encounter_id"], inputs)
+        patient = _patient(db, job.encounter_id, inputs)
         if inputs.marker_side_mm is not None:
             config = msgspec.structs.replace(
                 config,
@@ -80,12 +81,12 @@ def run(config: Config, claim: Claim) -> JobState:
         result = analyze(
             config, source, folder / "analysis", masks=masks, ruler=ruler, patient=patient, progress=progress
         )
-        state = _store(db, queue, claim, row, inputs, result)
+        state = _store(db, queue, claim, job, inputs, result)
         if state is JobState.done:
             try:
-                update_track(db, config, row["patient_id"])
+                update_track(db, config, job.patient_id)
             except Exception:
-                log.exception("healing track of patient %s not updated", row["patient_id"])
+                log.exception("healing track of patient %s not updated", job.patient_id)
         return state
     finally:
         db.close()
@@ -145,7 +146,9 @@ def _patient(db: Database, encounter_id: str, inputs: JobInputs) -> Patient:
     return Patient(hours_since_injury=hours, height_cm=height, weight_kg=weight)
 
 
-def _store(db: Database, queue: JobQueue, claim: Claim, row, inputs: JobInputs, result: AnalysisResult) -> JobState:
+def _store(
+    db: Database, queue: JobQueue, claim: Claim, job: StoredJob, inputs: JobInputs, result: AnalysisResult
+) -> JobState:
     now = iso(utcnow())
     with db.write() as conn:
         if result.status is AnalysisStatus.failed:
@@ -163,11 +166,11 @@ def _store(db: Database, queue: JobQueue, claim: Claim, row, inputs: JobInputs, 
         ):
             return JobState.running
         record = BurnAnalysis(
-            encounter_id=row["encounter_id"],
+            encounter_id=job.encounter_id,
             job_id=claim.job_id,
             assets=[p.asset_id for p in inputs.pictures],
-            requested_by=row["created_by"],
-            requested_at=row["created_at"],
+            requested_by=job.created_by,
+            requested_at=job.created_at,
             completed_at=now,
             captured=inputs.captured,
             result=result,
@@ -176,7 +179,7 @@ def _store(db: Database, queue: JobQueue, claim: Claim, row, inputs: JobInputs, 
             conn,
             kind=RecordKind.burn_analysis,
             record_id=claim.job_id,
-            parent_id=row["encounter_id"],
+            parent_id=job.encounter_id,
             data=msgspec.json.encode(record),
             action="analysis.store",
         )

@@ -14,10 +14,10 @@ import msgspec
 
 from base.storage import records as store
 from gateway.jobs import folders
+from gateway.storage import jobs
 from gateway.storage.database import Database
 from schemas.config import Config
 from schemas.errors import NotFound
-from schemas.jobs import CaptureTime
 from schemas.longitudinal import TrackResult
 from schemas.records import RecordKind
 
@@ -29,24 +29,20 @@ def sessions(db: Database, config: Config, patient_id: str) -> list:
     """The latest finished measurement of each of the patient's encounters, with its day since the injury counted
     to when its pictures were taken (as the analysis counts its hours since injury)."""
     conn = db.connection()
-    rows = conn.execute(
-        "SELECT id, encounter_id, captured FROM analysis_jobs WHERE patient_id = ? AND state = 'done'"
-        " AND result_status = 'ok' ORDER BY finished_at",
-        (patient_id,),
-    ).fetchall()
-    latest = {r["encounter_id"]: r for r in rows}  # a re-analysis of a visit replaces the earlier one
+    # A re-analysis of a visit replaces the earlier one.
+    latest = {job.encounter_id: job for job in jobs.measured(conn, patient_id)}
     visits = []
-    for encounter_id, row in latest.items():
+    for encounter_id, job in latest.items():
         encounter = store.find_head(conn, RecordKind.encounter, encounter_id)
         if encounter is None or encounter.meta.deleted:
             continue
         injury = encounter.data.get("time_of_injury")
         # Jobs queued before capture times were kept: the visit's arrival stands in.
-        taken = msgspec.json.decode(row["captured"], type=CaptureTime).at if row["captured"] else None
+        taken = job.captured.at if job.captured else None
         visits.append(
             (
                 dt.datetime.fromisoformat(taken or encounter.data["time_of_arrival"]),
-                row["id"],
+                job.id,
                 dt.datetime.fromisoformat(injury) if injury else None,
             )
         )

@@ -21,14 +21,13 @@ from gateway.jobs.capture_time import capture_time
 from gateway.jobs.queue import JobQueue
 from gateway.services.assets import AssetService
 from gateway.services.validation import require_live_encounter
+from gateway.storage import assets as asset_rows
 from gateway.storage.database import Database
 from processing.stages import code_digest
 from schemas.analysis import AnalysisResult
-from schemas.base import iso, utcnow
 from schemas.capture import Asset, AssetKind, MediaType
 from schemas.config import Config
 from schemas.errors import Conflict, InvalidInput
-from schemas.ids import uuid7
 from schemas.jobs import AnalysisJob, AnalysisRequest, BurnAnalysis, JobAttempt, JobInputs, JobState, PictureRef
 from schemas.longitudinal import TrackResult
 from schemas.patient import EncounterMode
@@ -72,51 +71,25 @@ class AnalysisService:
             encounter.data.get("time_of_injury"),
         ]
         digest = _digest(self.config, refs, body, record)
-        mode = EncounterMode(encounter.data["mode"])
-        now = iso(utcnow())
         injury = encounter.data.get("time_of_injury")
         captured = capture_time(pictures, dt.datetime.fromisoformat(injury) if injury else None, self.config.analysis)
+        # The queue stamps requested_at when it queues the job.
         inputs = JobInputs(
-            pictures=refs,
-            masks=body.masks,
-            ruler=body.ruler,
-            marker_side_mm=body.marker_side_mm,
-            requested_at=now,
-            captured=captured,
+            pictures=refs, masks=body.masks, ruler=body.ruler, marker_side_mm=body.marker_side_mm, captured=captured
         )
         with self.db.write() as conn:
             require_live_encounter(conn, encounter_id)
-            existing = conn.execute(
-                "SELECT id FROM analysis_jobs WHERE encounter_id = ? AND input_digest = ? AND state IN"
-                " ('queued', 'running', 'done')",
-                (encounter_id, digest),
-            ).fetchone()
-            if existing is not None:
-                job_id, created = existing["id"], False
-            else:
-                job_id, created = uuid7(), True
-                conn.execute(
-                    "INSERT INTO analysis_jobs (id, encounter_id, patient_id, input_digest, request, state, priority,"
-                    " max_attempts, next_attempt_at, pictures, created_at, created_by, user_id, message, captured)"
-                    " VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?,?)",
-                    (
-                        job_id,
-                        encounter_id,
-                        encounter.data["patient_id"],
-                        digest,
-                        msgspec.json.encode(inputs).decode(),
-                        JobState.queued.value,
-                        0 if mode is EncounterMode.emergency else 1,
-                        self.config.jobs.max_attempts,
-                        now,
-                        len(refs),
-                        now,
-                        principal.username,
-                        principal.user_id,
-                        "waiting for a worker",
-                        msgspec.json.encode(captured).decode(),
-                    ),
-                )
+            job_id, created = self.queue.enqueue_in(
+                conn,
+                encounter_id=encounter_id,
+                patient_id=encounter.data["patient_id"],
+                input_digest=digest,
+                inputs=inputs,
+                mode=EncounterMode(encounter.data["mode"]),
+                created_by=principal.username,
+                user_id=principal.user_id,
+            )
+            if created:
                 audit.append(
                     conn,
                     action="analysis.request",
@@ -212,8 +185,8 @@ class AnalysisService:
 
 
 def _frames_done(db: Database, video_id: str) -> bool:
-    row = db.connection().execute("SELECT frames_done_at FROM assets WHERE id = ?", (video_id,)).fetchone()
-    return row is not None and row["frames_done_at"] is not None
+    progress = asset_rows.find_frames_progress(db.connection(), video_id)
+    return progress is not None and progress.done_at is not None
 
 
 def _check_mask(mask, pictures: dict[str, Asset]) -> None:

@@ -7,15 +7,15 @@ import binascii
 import hashlib
 import json
 import os
+import sqlite3
 from pathlib import Path
-
-import msgspec
 
 from base.accounts.permissions import Principal, require_read
 from base.storage import audit
 from base.storage.blobs import MediaStore, sha256_of
 from base.storage.records import get_head
 from gateway.services.validation import require_live_encounter
+from gateway.storage import assets as asset_rows
 from gateway.storage.database import Database
 from processing.capture.media import check_photo, check_video, sniff
 from processing.capture.quality import gate_bytes
@@ -24,30 +24,9 @@ from processing.capture.readiness import assess as assess_readiness
 from schemas.base import iso, utcnow
 from schemas.capture import Asset, AssetKind, CaptureMetadata, CaptureReadiness, MediaType, QualityVerdict
 from schemas.config import Config
-from schemas.errors import ChecksumMismatch, InvalidInput, NotFound, PayloadTooLarge
+from schemas.errors import ChecksumMismatch, InvalidInput, PayloadTooLarge
 from schemas.ids import uuid7
 from schemas.records import RecordKind
-
-_verdict = msgspec.json.Decoder(QualityVerdict)
-_metadata = msgspec.json.Decoder(CaptureMetadata)
-
-
-def _asset(row) -> Asset:
-    return Asset(
-        id=row["id"],
-        encounter_id=row["encounter_id"],
-        kind=AssetKind(row["kind"]),
-        media_type=MediaType(row["media_type"]),
-        sha256=row["sha256"],
-        size_bytes=row["size_bytes"],
-        filename=row["filename"],
-        metadata=_metadata.decode(row["metadata"]),
-        verdict=_verdict.decode(row["verdict"]) if row["verdict"] else None,
-        source_asset_id=row["source_asset_id"],
-        created_at=row["created_at"],
-        created_by=row["created_by"],
-        device_id=row["device_id"],
-    )
 
 
 class AssetService:
@@ -134,22 +113,19 @@ class AssetService:
             asset_id = insert_asset_row(
                 conn, principal, encounter_id, kind, media_type, sha, size, filename, metadata, verdict, source_asset_id
             )
-            _mark_upload_complete(conn, upload_id, asset_id)
-            return _asset(conn.execute("SELECT * FROM assets WHERE id = ?", (asset_id,)).fetchone())
+            if upload_id is not None:
+                asset_rows.mark_upload_complete(conn, upload_id, asset_id)
+            return asset_rows.get_asset(conn, asset_id)
 
     def get(self, principal: Principal, asset_id: str) -> Asset:
         require_read(principal, RecordKind.encounter)
-        row = self.db.connection().execute("SELECT * FROM assets WHERE id = ?", (asset_id,)).fetchone()
-        if row is None:
-            raise NotFound(f"no asset {asset_id}")
-        return _asset(row)
+        return asset_rows.get_asset(self.db.connection(), asset_id)
 
     def for_encounter(self, principal: Principal, encounter_id: str) -> list[Asset]:
         require_read(principal, RecordKind.encounter)
         conn = self.db.connection()
         get_head(conn, RecordKind.encounter, encounter_id)  # an unknown encounter is a 404, not an empty list
-        rows = conn.execute("SELECT * FROM assets WHERE encounter_id = ? ORDER BY created_at, id", (encounter_id,))
-        return [_asset(r) for r in rows.fetchall()]
+        return asset_rows.assets_of_encounter(conn, encounter_id)
 
     def readiness(self, principal: Principal, encounter_id: str) -> CaptureReadiness:
         """Whether the encounter's photos and frames are enough for 3D analysis."""
@@ -166,14 +142,6 @@ class AssetService:
     def file(self, principal: Principal, asset_id: str) -> tuple[Asset, Path]:
         asset = self.get(principal, asset_id)
         return asset, self.store.blob(asset.sha256)
-
-
-def _mark_upload_complete(conn, upload_id: str | None, asset_id: str) -> None:
-    if upload_id is not None:
-        conn.execute(
-            "UPDATE uploads SET state = 'complete', asset_id = ?, error = NULL WHERE id = ? AND state = 'open'",
-            (asset_id, upload_id),
-        )
 
 
 def _check_whole_file(expected: str | None, sha256_hex: str) -> None:
@@ -193,7 +161,7 @@ def _check_whole_file(expected: str | None, sha256_hex: str) -> None:
 
 
 def insert_asset_row(
-    conn,
+    conn: sqlite3.Connection,
     principal: Principal,
     encounter_id: str,
     kind: AssetKind,
@@ -210,38 +178,32 @@ def insert_asset_row(
     The same bytes already stored for this encounter (a retry, two uploads finishing together,
     a frame identical to a photo) keep their existing asset.
     """
-    existing = conn.execute(
-        "SELECT id FROM assets WHERE encounter_id = ? AND sha256 = ?", (encounter_id, sha)
-    ).fetchone()
+    existing = asset_rows.asset_id_with_bytes(conn, encounter_id, sha)
     if existing is not None:
-        return existing["id"]
-    asset_id = uuid7()
-    conn.execute(
-        "INSERT INTO assets (id, encounter_id, kind, media_type, sha256, size_bytes, filename, metadata, verdict,"
-        " source_asset_id, created_at, created_by, device_id) VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?)",
-        (
-            asset_id,
-            encounter_id,
-            kind.value,
-            media_type.value,
-            sha,
-            size,
-            filename,
-            msgspec.json.encode(metadata).decode(),
-            msgspec.json.encode(verdict).decode() if verdict else None,
-            source_asset_id,
-            iso(utcnow()),
-            principal.username,
-            principal.device_id,
-        ),
+        return existing
+    asset = Asset(
+        id=uuid7(),
+        encounter_id=encounter_id,
+        kind=kind,
+        media_type=media_type,
+        sha256=sha,
+        size_bytes=size,
+        filename=filename,
+        metadata=metadata,
+        verdict=verdict,
+        source_asset_id=source_asset_id,
+        created_at=iso(utcnow()),
+        created_by=principal.username,
+        device_id=principal.device_id,
     )
+    asset_rows.insert_asset(conn, asset)
     audit.append(
         conn,
         action="asset.create",
         user_id=principal.user_id,
         device_id=principal.device_id,
         kind="asset",
-        record_id=asset_id,
+        record_id=asset.id,
         detail=json.dumps({"sha256": sha, "encounter": encounter_id}),
     )
-    return asset_id
+    return asset.id

@@ -19,10 +19,10 @@ import msgspec
 from base.accounts.permissions import Principal
 from gateway.services.assets import AssetService, insert_asset_row
 from gateway.services.validation import require_live_encounter
+from gateway.storage import assets as asset_rows
 from gateway.storage.database import Database
 from processing.capture.frames import ExtractedFrame, extract
 from schemas.accounts import Role
-from schemas.base import iso, utcnow
 from schemas.capture import Asset, AssetKind, CaptureMetadata, MediaType
 from schemas.config import Config
 from schemas.errors import BurnedgeError, InvalidInput, NotFound
@@ -38,12 +38,7 @@ class FrameService:
 
     def pending(self) -> list[str]:
         """Ids of the videos whose frames are not stored yet, oldest first."""
-        rows = (
-            self.db.connection()
-            .execute("SELECT id FROM assets WHERE kind = 'video' AND frames_done_at IS NULL ORDER BY created_at")
-            .fetchall()
-        )
-        return [r["id"] for r in rows]
+        return asset_rows.pending_video_ids(self.db.connection())
 
     def extract_pending(self) -> int:
         """Extract and store the frames of every pending video; returns how many were processed.
@@ -96,38 +91,31 @@ class FrameService:
         None if the video was done meanwhile. Frames whose bytes the encounter already has keep that asset.
         """
         with self.db.write() as conn:
-            row = conn.execute("SELECT frames_done_at FROM assets WHERE id = ?", (video.id,)).fetchone()
-            if row is None or row["frames_done_at"] is not None:
+            progress = asset_rows.find_frames_progress(conn, video.id)
+            if progress is None or progress.done_at is not None:
                 return None
             try:
                 require_live_encounter(conn, video.encounter_id)
             except (InvalidInput, NotFound) as exc:
-                _set_done(conn, video.id, exc.detail)
+                asset_rows.set_frames_done(conn, video.id, exc.detail)
                 return []
             ids = [_insert_frame(conn, video, sha, frame) for sha, frame in frames]
-            _set_done(conn, video.id, None)
+            asset_rows.set_frames_done(conn, video.id, None)
         return list(dict.fromkeys(ids))
 
     def _mark(self, video_id: str, error: str | None = None) -> None:
         with self.db.write() as conn:
-            _set_done(conn, video_id, error)
+            asset_rows.set_frames_done(conn, video_id, error)
 
     def _failed(self, video_id: str, error: str) -> None:
         with self.db.write() as conn:
-            row = conn.execute("SELECT frames_error, frames_done_at FROM assets WHERE id = ?", (video_id,)).fetchone()
-            if row is None or row["frames_done_at"] is not None:
+            progress = asset_rows.find_frames_progress(conn, video_id)
+            if progress is None or progress.done_at is not None:
                 return
-            if row["frames_error"] is None:
-                conn.execute("UPDATE assets SET frames_error = ? WHERE id = ?", (error, video_id))
+            if progress.error is None:
+                asset_rows.set_frames_error(conn, video_id, error)
             else:
-                _set_done(conn, video_id, error)
-
-
-def _set_done(conn: sqlite3.Connection, video_id: str, error: str | None) -> None:
-    conn.execute(
-        "UPDATE assets SET frames_done_at = ?, frames_error = ? WHERE id = ? AND frames_done_at IS NULL",
-        (iso(utcnow()), error, video_id),
-    )
+                asset_rows.set_frames_done(conn, video_id, error)
 
 
 def _insert_frame(conn: sqlite3.Connection, video: Asset, sha: str, frame: ExtractedFrame) -> str:

@@ -15,11 +15,8 @@ import msgspec
 from base.accounts.permissions import Principal, readable_kinds, require_delete, require_write
 from base.storage import records as store
 from gateway.services.records import RecordService
-from schemas.base import iso, utcnow
 from schemas.errors import BurnedgeError, Conflict, InvalidInput, VersionMismatch
 from schemas.sync import ChangesPage, Mutation, MutationOp, MutationResult, MutationStatus, PushResponse
-
-_result_decoder = msgspec.json.Decoder(MutationResult)
 
 
 class PhoneSync:
@@ -45,16 +42,14 @@ class PhoneSync:
         with db.write() as conn:
             for mutation in mutations:
                 fingerprint = _fingerprint(mutation)
-                stored = conn.execute(
-                    "SELECT fingerprint, result FROM applied_mutations WHERE mutation_id = ?", (mutation.mutation_id,)
-                ).fetchone()
+                stored = store.find_applied_mutation(conn, mutation.mutation_id)
                 try:
                     if stored is not None:
                         results.append(self._replay(principal, mutation, fingerprint, stored))
                         continue
                     with db.savepoint(conn):
                         result = self._apply(conn, principal, mutation)
-                        self._remember(conn, principal, fingerprint, result)
+                        store.remember_applied_mutation(conn, result, fingerprint, principal.user_id)
                 except BurnedgeError as exc:
                     # Not remembered: a retry re-evaluates it (its parent may have arrived meanwhile).
                     result = _failure(mutation, exc)
@@ -67,9 +62,11 @@ class PhoneSync:
             rejected=counts[MutationStatus.rejected],
         )
 
-    def _replay(self, principal: Principal, m: Mutation, fingerprint: str, stored) -> MutationResult:
+    def _replay(
+        self, principal: Principal, m: Mutation, fingerprint: str, stored: store.AppliedMutation
+    ) -> MutationResult:
         """The stored outcome of a mutation seen before, if it really is the same mutation."""
-        if stored["fingerprint"] != fingerprint:
+        if stored.fingerprint != fingerprint:
             raise InvalidInput(
                 f"mutation_id {m.mutation_id} was already used for a different change: give each change its own id"
             )
@@ -77,7 +74,7 @@ class PhoneSync:
             require_delete(principal, m.kind)
         else:
             require_write(principal, m.kind)
-        return msgspec.structs.replace(_result_decoder.decode(stored["result"]), replayed=True)
+        return msgspec.structs.replace(stored.result, replayed=True)
 
     def _apply(self, conn, principal: Principal, m: Mutation) -> MutationResult:
         svc = self.records
@@ -89,12 +86,6 @@ class PhoneSync:
             outcome = svc.delete_in(conn, principal, m.kind, m.id, _require_base(m), m.reason or "")
         return MutationResult(
             mutation_id=m.mutation_id, status=MutationStatus.applied, version=outcome.record.meta.version
-        )
-
-    def _remember(self, conn, principal: Principal, fingerprint: str, result: MutationResult) -> None:
-        conn.execute(
-            "INSERT INTO applied_mutations (mutation_id, fingerprint, result, applied_at, user_id) VALUES (?,?,?,?,?)",
-            (result.mutation_id, fingerprint, msgspec.json.encode(result).decode(), iso(utcnow()), principal.user_id),
         )
 
 

@@ -12,7 +12,6 @@ HEAD or by the periodic housekeeping, so a phone that saw "all bytes received" i
 from __future__ import annotations
 
 import datetime as dt
-import json
 import shutil
 import threading
 from collections.abc import Iterator
@@ -21,13 +20,14 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from base.accounts.permissions import Principal, require_capture
+from base.storage import accounts as account_rows
 from base.storage.blobs import MediaStore
 from gateway.services.assets import AssetService
 from gateway.services.validation import require_live_encounter
+from gateway.storage import assets as asset_rows
 from gateway.storage.database import Database
-from schemas.accounts import Role
 from schemas.base import iso, utcnow
-from schemas.capture import Asset, UploadPhase
+from schemas.capture import Asset, StoredUpload, UploadPhase
 from schemas.config import Config
 from schemas.errors import (
     BurnedgeError,
@@ -36,7 +36,6 @@ from schemas.errors import (
     Gone,
     InsufficientStorage,
     InvalidInput,
-    NotFound,
     PayloadTooLarge,
     StorageError,
     TooManyAttempts,
@@ -104,35 +103,34 @@ class UploadService:
         upload_id, now = uuid7(), utcnow()
         with self.db.write() as conn:
             require_live_encounter(conn, encounter_id)
-            open_rows = conn.execute("SELECT id, length, created_by FROM uploads WHERE state = 'open'").fetchall()
-            if sum(r["created_by"] == principal.user_id for r in open_rows) >= limits.max_open_per_user:
+            open_uploads = asset_rows.open_uploads(conn)
+            if sum(u.created_by == principal.user_id for u in open_uploads) >= limits.max_open_per_user:
                 raise TooManyAttempts(
                     f"you have {limits.max_open_per_user} unfinished uploads: finish or cancel some first",
                     retry_after_s=60,
                 )
-            self._check_disk(open_rows, length)
-            conn.execute(
-                "INSERT INTO uploads (id, encounter_id, length, metadata, filename, state, created_by, device_id,"
-                " created_at, expires_at) VALUES (?,?,?,?,?,?,?,?,?,?)",
-                (
-                    upload_id,
-                    encounter_id,
-                    length,
-                    json.dumps(metadata),
-                    filename,
-                    UploadPhase.open.value,
-                    principal.user_id,
-                    principal.device_id,
-                    iso(now),
-                    iso(now + dt.timedelta(seconds=limits.expiry_s)),
-                ),
+            self._check_disk(open_uploads, length)
+            upload = StoredUpload(
+                id=upload_id,
+                encounter_id=encounter_id,
+                length=length,
+                metadata=metadata,
+                filename=filename,
+                state=UploadPhase.open,
+                created_by=principal.user_id,
+                device_id=principal.device_id,
+                created_at=iso(now),
+                expires_at=iso(now + dt.timedelta(seconds=limits.expiry_s)),
+                asset_id=None,
+                error=None,
             )
+            asset_rows.insert_upload(conn, upload)
             self.store.create_part(upload_id)
         return self._state(self._row(upload_id))
 
-    def _check_disk(self, open_rows, length: int) -> None:
+    def _check_disk(self, open_uploads: list[StoredUpload], length: int) -> None:
         """What open uploads will still write counts as used: abandoned ones hold it until they expire."""
-        outstanding = sum(r["length"] - self._held(r["id"]) for r in open_rows)
+        outstanding = sum(u.length - self._held(u.id) for u in open_uploads)
         free = shutil.disk_usage(self.store.root).free
         if free - outstanding - length < self.config.uploads.min_free_bytes:
             raise InsufficientStorage(
@@ -144,10 +142,10 @@ class UploadService:
         """For HEAD and GET; a full upload that was never recorded is completed first."""
         require_capture(principal)
         row = self._owned_row(principal, upload_id)
-        if row["state"] == UploadPhase.complete.value:
+        if row.state is UploadPhase.complete:
             return self._state(row)
         row = self._live_row(upload_id)
-        if self._held(upload_id) == row["length"]:
+        if self._held(upload_id) == row.length:
             try:
                 self.recover_one(upload_id)
             except Conflict:
@@ -173,11 +171,11 @@ class UploadService:
         try:
             return self.assets.store_upload(
                 principal,
-                row["encounter_id"],
+                row.encounter_id,
                 part,
-                row["filename"],
+                row.filename,
                 upload_id=upload_id,
-                expected=json.loads(row["metadata"]).get("checksum"),
+                expected=row.metadata.get("checksum"),
             )
         except StorageError:
             raise  # the database was busy: the file stays, and housekeeping completes it later
@@ -199,17 +197,14 @@ class UploadService:
         """Complete full uploads left unrecorded by a crash; drop expired unfinished ones. (completed, dropped)"""
         completed = dropped = 0
         now = iso(utcnow())
-        rows = (
-            self.db.connection().execute("SELECT id, length, expires_at FROM uploads WHERE state = 'open'").fetchall()
-        )
-        for row in rows:
+        for upload in asset_rows.open_uploads(self.db.connection()):
             try:
-                if self._held(row["id"]) == row["length"]:
-                    completed += self.recover_one(row["id"]) is not None
-                elif row["expires_at"] < now:
-                    with self.claim(row["id"]):
-                        self.store.part(row["id"]).unlink(missing_ok=True)
-                        dropped += self._finish(row["id"], UploadPhase.expired)
+                if self._held(upload.id) == upload.length:
+                    completed += self.recover_one(upload.id) is not None
+                elif upload.expires_at < now:
+                    with self.claim(upload.id):
+                        self.store.part(upload.id).unlink(missing_ok=True)
+                        dropped += self._finish(upload.id, UploadPhase.expired)
             except Conflict:
                 continue  # busy right now: its own request finishes it
         return completed, dropped
@@ -217,16 +212,13 @@ class UploadService:
     def recover_one(self, upload_id: str) -> Asset | None:
         """Complete an upload whose bytes all arrived, as the person who sent them."""
         row = self._row(upload_id)
-        user = (
-            self.db.connection()
-            .execute("SELECT username, role FROM users WHERE id = ?", (row["created_by"],))
-            .fetchone()
-        )
-        if user is None:
+        stored_user = account_rows.find_user(self.db.connection(), row.created_by)
+        if stored_user is None:
             return None
-        sender = Principal(row["created_by"], user["username"], Role(user["role"]), row["device_id"], "")
+        user = stored_user.user
+        sender = Principal(row.created_by, user.username, user.role, row.device_id, "")
         with self.claim(upload_id):
-            if self._row(upload_id)["state"] != UploadPhase.open.value:
+            if self._row(upload_id).state is not UploadPhase.open:
                 return None
             try:
                 return self.complete(sender, upload_id)
@@ -240,48 +232,40 @@ class UploadService:
         part = self.store.part(upload_id)
         return part.stat().st_size if part.exists() else 0
 
-    def _row(self, upload_id: str):
-        row = self.db.connection().execute("SELECT * FROM uploads WHERE id = ?", (upload_id,)).fetchone()
-        if row is None:
-            raise NotFound(f"no upload {upload_id}")
-        return row
+    def _row(self, upload_id: str) -> StoredUpload:
+        return asset_rows.get_upload(self.db.connection(), upload_id)
 
-    def _owned_row(self, principal: Principal, upload_id: str):
+    def _owned_row(self, principal: Principal, upload_id: str) -> StoredUpload:
         """Uploads belong to who started them, or to the phone they were started from (shared clinic phones)."""
         row = self._row(upload_id)
-        same_device = principal.device_id is not None and principal.device_id == row["device_id"]
-        if row["created_by"] != principal.user_id and not same_device:
+        same_device = principal.device_id is not None and principal.device_id == row.device_id
+        if row.created_by != principal.user_id and not same_device:
             raise Forbidden("this upload was started by someone else on another phone")
         return row
 
-    def _live_row(self, upload_id: str):
+    def _live_row(self, upload_id: str) -> StoredUpload:
         row = self._row(upload_id)
-        if row["state"] != UploadPhase.open.value:
-            reason = f": {row['error']}" if row["error"] else ""
-            raise Gone(f"this upload is {row['state']}{reason}; start a new one")
-        if dt.datetime.fromisoformat(row["expires_at"]) < utcnow():
+        if row.state is not UploadPhase.open:
+            reason = f": {row.error}" if row.error else ""
+            raise Gone(f"this upload is {row.state.value}{reason}; start a new one")
+        if dt.datetime.fromisoformat(row.expires_at) < utcnow():
             raise Gone("this upload expired before it was finished: start a new one")
         return row
 
-    def _state(self, row) -> UploadState:
-        phase = UploadPhase(row["state"])
-        offset = row["length"] if phase is UploadPhase.complete else self._held(row["id"])
+    def _state(self, row: StoredUpload) -> UploadState:
+        offset = row.length if row.state is UploadPhase.complete else self._held(row.id)
         return UploadState(
-            id=row["id"],
-            encounter_id=row["encounter_id"],
-            length=row["length"],
+            id=row.id,
+            encounter_id=row.encounter_id,
+            length=row.length,
             offset=offset,
-            metadata=json.loads(row["metadata"]),
-            expires_at=dt.datetime.fromisoformat(row["expires_at"]),
-            phase=phase,
-            asset_id=row["asset_id"],
+            metadata=row.metadata,
+            expires_at=dt.datetime.fromisoformat(row.expires_at),
+            phase=row.state,
+            asset_id=row.asset_id,
         )
 
     def _finish(self, upload_id: str, phase: UploadPhase, *, error: str | None = None) -> bool:
         """Move an open upload to its end state; False if it had already ended another way."""
         with self.db.write() as conn:
-            cur = conn.execute(
-                "UPDATE uploads SET state = ?, error = ? WHERE id = ? AND state = 'open'",
-                (phase.value, error, upload_id),
-            )
-            return cur.rowcount == 1
+            return asset_rows.end_upload(conn, upload_id, phase, error)

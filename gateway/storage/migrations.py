@@ -159,7 +159,7 @@ def m006_analysis_jobs(db: Database) -> None:
 
 @migrations()
 def m007_sync(db: Database) -> None:
-    from sync.peers import PEERS_DDL
+    from sync.storage.peers import PEERS_DDL
 
     db.execute(PEERS_DDL)
     db.execute(

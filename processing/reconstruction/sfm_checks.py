@@ -3,13 +3,13 @@
 from __future__ import annotations
 
 import math
-import sqlite3
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import pycolmap
 
+from processing.reconstruction.colmap_database import read_match_tables
 from schemas.config import ReconstructionConfig
 from schemas.errors import CaptureInsufficient
 from schemas.reconstruction import FailureCode, SfmQuality
@@ -65,20 +65,9 @@ class PairGraph:
 
 
 def pair_graph(database: Path) -> PairGraph:
-    with sqlite3.connect(f"file:{database}?mode=ro", uri=True) as connection:
-        names = dict(connection.execute("SELECT image_id, name FROM images"))
-        matches = {_pair(pid): rows for pid, rows in connection.execute("SELECT pair_id, rows FROM matches")}
-        verified = {
-            _pair(pid): (rows, config)
-            for pid, rows, config in connection.execute("SELECT pair_id, rows, config FROM two_view_geometries")
-        }
-    connection.close()
-    return PairGraph(names, matches, verified)
-
-
-def _pair(pair_id: int) -> tuple[int, int]:
-    second = pair_id % 2147483647
-    return (pair_id - second) // 2147483647, second
+    """Which pictures matched which, from the COLMAP database at `database`."""
+    tables = read_match_tables(database)
+    return PairGraph(tables.names, tables.matches, tables.verified)
 
 
 def check_model(

@@ -6,7 +6,7 @@ from __future__ import annotations
 from sqlite_utils import Database, Migrations
 
 from base.storage import schema
-from sync.peers import PEERS_DDL
+from sync.storage.peers import PEERS_DDL
 
 central_migrations = Migrations("burnedge-central")
 

@@ -14,17 +14,8 @@ import cv2
 import numpy as np
 
 from burnedge.demo_client import GatewayClient
-from tests.conftest import (
-    FAST_HASH_ENV,
-    PASSWORD,
-    REPO,
-    GatewayProcess,
-    add_user_cli,
-    encounter_body,
-    free_port,
-    patient_body,
-    wait_healthy,
-)
+from harness.bodies import encounter_body, patient_body
+from harness.processes import FAST_HASH_ENV, PASSWORD, REPO, GatewayProcess, add_user_cli, free_port, wait_healthy
 
 CLINIC = "clinic-test"
 CENTER = "center-test"

@@ -1,0 +1,150 @@
+"""Rows of stored bundles (`bundles`, `bundle_parts`): each version of a clinic's case, its parts and its receipt,
+and the consultants' view of them as cases."""
+
+from __future__ import annotations
+
+import sqlite3
+
+import msgspec
+
+from schemas.central import CaseItem, StoredBundle, StoredCase
+from schemas.transfer import (
+    URGENCY_ORDER,
+    BundleManifest,
+    BundlePart,
+    CaseSummary,
+    SignedEnvelope,
+    SiteIdentity,
+    Urgency,
+)
+
+_envelope = msgspec.msgpack.Decoder(SignedEnvelope)
+_CASE_SQL = """
+    SELECT b.*, p.identity AS peer_identity,
+        (SELECT n.bundle_id FROM bundles n WHERE n.site_id = b.site_id AND n.encounter_id = b.encounter_id
+            AND n.version > b.version ORDER BY n.version DESC LIMIT 1) AS superseded_by,
+        (SELECT COUNT(*) FROM notes t WHERE t.site_id = b.site_id AND t.encounter_id = b.encounter_id) AS notes,
+        (SELECT COUNT(*) FROM notes t WHERE t.site_id = b.site_id AND t.encounter_id = b.encounter_id
+            AND t.written_at >= b.stored_at) AS notes_since
+    FROM bundles b JOIN peers p ON p.site_id = b.site_id"""
+
+
+def _item(row: sqlite3.Row) -> CaseItem:
+    identity = msgspec.json.decode(row["peer_identity"], type=SiteIdentity)
+    return CaseItem(
+        site_id=row["site_id"],
+        site_name=identity.name,
+        bundle_id=row["bundle_id"],
+        encounter_id=row["encounter_id"],
+        patient_id=row["patient_id"],
+        version=row["version"],
+        urgency=Urgency(row["urgency"]),
+        summary=msgspec.json.decode(row["summary"], type=CaseSummary),
+        stored_at=row["stored_at"],
+        superseded_by=row["superseded_by"],
+        notes=row["notes"],
+        awaiting_advice=row["notes_since"] == 0,
+    )
+
+
+def list_cases(conn: sqlite3.Connection) -> list[CaseItem]:
+    """Every stored version of every case, most urgent first, then longest waiting."""
+    return [_item(r) for r in conn.execute(_CASE_SQL + " ORDER BY b.urgency_rank, b.stored_at").fetchall()]
+
+
+def find_case(conn: sqlite3.Connection, site_id: str, bundle_id: str) -> StoredCase | None:
+    """The case this bundle holds, with its manifest, or None when no such bundle is stored."""
+    row = conn.execute(_CASE_SQL + " WHERE b.site_id = ? AND b.bundle_id = ?", (site_id, bundle_id)).fetchone()
+    if row is None:
+        return None
+    return StoredCase(case=_item(row), manifest=msgspec.json.decode(row["manifest"], type=BundleManifest))
+
+
+def case_versions(conn: sqlite3.Connection, site_id: str, encounter_id: str) -> list[CaseItem]:
+    """Every stored version of the encounter's case, newest first."""
+    rows = conn.execute(
+        _CASE_SQL + " WHERE b.site_id = ? AND b.encounter_id = ? ORDER BY b.version DESC", (site_id, encounter_id)
+    ).fetchall()
+    return [_item(r) for r in rows]
+
+
+def _bundle(row: sqlite3.Row) -> StoredBundle:
+    return StoredBundle(
+        site_id=row["site_id"],
+        bundle_id=row["bundle_id"],
+        encounter_id=row["encounter_id"],
+        patient_id=row["patient_id"],
+        version=row["version"],
+        manifest_sha256=row["manifest_sha256"],
+        stored_at=row["stored_at"],
+    )
+
+
+def find_bundle(conn: sqlite3.Connection, site_id: str, bundle_id: str) -> StoredBundle | None:
+    """The stored bundle, or None when the site has none with this id."""
+    row = conn.execute("SELECT * FROM bundles WHERE site_id = ? AND bundle_id = ?", (site_id, bundle_id)).fetchone()
+    return _bundle(row) if row else None
+
+
+def latest_of_encounter(conn: sqlite3.Connection, site_id: str, encounter_id: str) -> StoredBundle | None:
+    """The highest version stored of the site's encounter, or None when none is."""
+    row = conn.execute(
+        "SELECT * FROM bundles WHERE site_id = ? AND encounter_id = ? ORDER BY version DESC LIMIT 1",
+        (site_id, encounter_id),
+    ).fetchone()
+    return _bundle(row) if row else None
+
+
+def find_receipt(conn: sqlite3.Connection, site_id: str, bundle_id: str) -> SignedEnvelope | None:
+    """The signed receipt the center gave for this bundle, or None when it is not stored."""
+    row = conn.execute(
+        "SELECT receipt FROM bundles WHERE site_id = ? AND bundle_id = ?", (site_id, bundle_id)
+    ).fetchone()
+    return None if row is None else _envelope.decode(row["receipt"])
+
+
+def find_part(conn: sqlite3.Connection, site_id: str, bundle_id: str, name: str) -> BundlePart | None:
+    """The stored bundle's part of this name, or None when it has none."""
+    row = conn.execute(
+        "SELECT * FROM bundle_parts WHERE site_id = ? AND bundle_id = ? AND name = ?", (site_id, bundle_id, name)
+    ).fetchone()
+    if row is None:
+        return None
+    return BundlePart(name=row["name"], media_type=row["media_type"], sha256=row["sha256"], size=row["size"])
+
+
+def insert_bundle(
+    conn: sqlite3.Connection,
+    site_id: str,
+    manifest: BundleManifest,
+    *,
+    manifest_sha256: str,
+    stored_at: str,
+    receipt: SignedEnvelope,
+) -> None:
+    """Store a bundle version and its parts' rows. sqlite3.IntegrityError when the site already stored this
+    version of the encounter from another bundle."""
+    conn.execute(
+        "INSERT INTO bundles (site_id, bundle_id, encounter_id, patient_id, version, supersedes, urgency,"
+        " urgency_rank, summary, manifest, manifest_sha256, stored_at, receipt)"
+        " VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?)",
+        (
+            site_id,
+            manifest.bundle_id,
+            manifest.encounter_id,
+            manifest.patient_id,
+            manifest.version,
+            manifest.supersedes,
+            manifest.summary.urgency.value,
+            URGENCY_ORDER[manifest.summary.urgency],
+            msgspec.json.encode(manifest.summary).decode(),
+            msgspec.json.encode(manifest).decode(),
+            manifest_sha256,
+            stored_at,
+            msgspec.msgpack.encode(receipt),
+        ),
+    )
+    conn.executemany(
+        "INSERT INTO bundle_parts (site_id, bundle_id, name, media_type, sha256, size) VALUES (?,?,?,?,?,?)",
+        [(site_id, manifest.bundle_id, p.name, p.media_type, p.sha256, p.size) for p in manifest.parts],
+    )

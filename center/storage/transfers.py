@@ -1,0 +1,53 @@
+"""Rows of transfers in progress (`incoming`): a clinic's signed announcement of a bundle, kept until its commit
+stores the bundle or the transfer is dropped."""
+
+from __future__ import annotations
+
+import sqlite3
+
+from schemas.central import Announcement
+
+
+def _announcement(row: sqlite3.Row) -> Announcement:
+    return Announcement(
+        site_id=row["site_id"],
+        bundle_id=row["bundle_id"],
+        envelope=row["envelope"],
+        manifest_sha256=row["manifest_sha256"],
+        encounter_id=row["encounter_id"],
+        version=row["version"],
+        chunks=row["chunks"],
+        announced_at=row["announced_at"],
+    )
+
+
+def find_announcement(conn: sqlite3.Connection, site_id: str, bundle_id: str) -> Announcement | None:
+    """The site's announcement of this bundle, or None when none is waiting for its commit."""
+    row = conn.execute("SELECT * FROM incoming WHERE site_id = ? AND bundle_id = ?", (site_id, bundle_id)).fetchone()
+    return _announcement(row) if row else None
+
+
+def insert_announcement(conn: sqlite3.Connection, announcement: Announcement) -> None:
+    conn.execute(
+        "INSERT INTO incoming (site_id, bundle_id, envelope, manifest_sha256, encounter_id,"
+        " version, chunks, announced_at) VALUES (?,?,?,?,?,?,?,?)",
+        (
+            announcement.site_id,
+            announcement.bundle_id,
+            announcement.envelope,
+            announcement.manifest_sha256,
+            announcement.encounter_id,
+            announcement.version,
+            announcement.chunks,
+            announcement.announced_at,
+        ),
+    )
+
+
+def delete_announcement(conn: sqlite3.Connection, site_id: str, bundle_id: str) -> None:
+    conn.execute("DELETE FROM incoming WHERE site_id = ? AND bundle_id = ?", (site_id, bundle_id))
+
+
+def announced_before(conn: sqlite3.Connection, cutoff: str) -> list[Announcement]:
+    """Transfers announced before `cutoff` (a stored timestamp) and not committed since."""
+    return [_announcement(r) for r in conn.execute("SELECT * FROM incoming WHERE announced_at < ?", (cutoff,))]

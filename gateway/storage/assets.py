@@ -1,0 +1,194 @@
+"""Rows of the capture intake: stored assets (photos, videos, frames), their videos' frame progress, and uploads.
+
+Knows SQL, not capture rules: the services decide what to store and write the audit entries, in the same
+transaction, through the connection they pass in.
+"""
+
+from __future__ import annotations
+
+import json
+import sqlite3
+from dataclasses import dataclass
+
+import msgspec
+
+from schemas.base import iso, utcnow
+from schemas.capture import Asset, AssetKind, CaptureMetadata, MediaType, QualityVerdict, StoredUpload, UploadPhase
+from schemas.errors import NotFound
+
+_verdict = msgspec.json.Decoder(QualityVerdict)
+_metadata = msgspec.json.Decoder(CaptureMetadata)
+
+
+@dataclass(frozen=True)
+class FramesProgress:
+    """Where a video's frame extraction stands."""
+
+    done_at: str | None
+    """When its frames were stored (or it was given up on); None while pending."""
+    error: str | None
+    """Why the last extraction failed, if it did."""
+
+
+# assets ------------------------------------------------------------------------------------
+
+
+def _asset(row: sqlite3.Row) -> Asset:
+    return Asset(
+        id=row["id"],
+        encounter_id=row["encounter_id"],
+        kind=AssetKind(row["kind"]),
+        media_type=MediaType(row["media_type"]),
+        sha256=row["sha256"],
+        size_bytes=row["size_bytes"],
+        filename=row["filename"],
+        metadata=_metadata.decode(row["metadata"]),
+        verdict=_verdict.decode(row["verdict"]) if row["verdict"] else None,
+        source_asset_id=row["source_asset_id"],
+        created_at=row["created_at"],
+        created_by=row["created_by"],
+        device_id=row["device_id"],
+    )
+
+
+def get_asset(conn: sqlite3.Connection, asset_id: str) -> Asset:
+    """The asset with this id; NotFound if there is none."""
+    row = conn.execute("SELECT * FROM assets WHERE id = ?", (asset_id,)).fetchone()
+    if row is None:
+        raise NotFound(f"no asset {asset_id}")
+    return _asset(row)
+
+
+def assets_of_encounter(conn: sqlite3.Connection, encounter_id: str) -> list[Asset]:
+    """The encounter's assets, oldest first."""
+    rows = conn.execute("SELECT * FROM assets WHERE encounter_id = ? ORDER BY created_at, id", (encounter_id,))
+    return [_asset(r) for r in rows.fetchall()]
+
+
+def asset_id_with_bytes(conn: sqlite3.Connection, encounter_id: str, sha256: str) -> str | None:
+    """The id of the encounter's asset holding these bytes, or None when the encounter has none with them."""
+    row = conn.execute("SELECT id FROM assets WHERE encounter_id = ? AND sha256 = ?", (encounter_id, sha256)).fetchone()
+    return None if row is None else row["id"]
+
+
+def insert_asset(conn: sqlite3.Connection, asset: Asset) -> None:
+    """Write a new asset row, inside the caller's transaction."""
+    conn.execute(
+        "INSERT INTO assets (id, encounter_id, kind, media_type, sha256, size_bytes, filename, metadata, verdict,"
+        " source_asset_id, created_at, created_by, device_id) VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?)",
+        (
+            asset.id,
+            asset.encounter_id,
+            asset.kind.value,
+            asset.media_type.value,
+            asset.sha256,
+            asset.size_bytes,
+            asset.filename,
+            msgspec.json.encode(asset.metadata).decode(),
+            msgspec.json.encode(asset.verdict).decode() if asset.verdict else None,
+            asset.source_asset_id,
+            asset.created_at,
+            asset.created_by,
+            asset.device_id,
+        ),
+    )
+
+
+# frames of videos --------------------------------------------------------------------------
+
+
+def pending_video_ids(conn: sqlite3.Connection) -> list[str]:
+    """Ids of the videos whose frames are not stored yet, oldest first."""
+    rows = conn.execute(
+        "SELECT id FROM assets WHERE kind = 'video' AND frames_done_at IS NULL ORDER BY created_at"
+    ).fetchall()
+    return [r["id"] for r in rows]
+
+
+def find_frames_progress(conn: sqlite3.Connection, video_id: str) -> FramesProgress | None:
+    """Where the video's frame extraction stands; None when there is no such asset."""
+    row = conn.execute("SELECT frames_done_at, frames_error FROM assets WHERE id = ?", (video_id,)).fetchone()
+    return None if row is None else FramesProgress(done_at=row["frames_done_at"], error=row["frames_error"])
+
+
+def set_frames_error(conn: sqlite3.Connection, video_id: str, error: str) -> None:
+    """Remember why an extraction failed, leaving the video pending."""
+    conn.execute("UPDATE assets SET frames_error = ? WHERE id = ?", (error, video_id))
+
+
+def set_frames_done(conn: sqlite3.Connection, video_id: str, error: str | None) -> None:
+    """Mark a pending video done now, with the reason if its frames were given up on; a done video stays as it is."""
+    conn.execute(
+        "UPDATE assets SET frames_done_at = ?, frames_error = ? WHERE id = ? AND frames_done_at IS NULL",
+        (iso(utcnow()), error, video_id),
+    )
+
+
+# uploads -----------------------------------------------------------------------------------
+
+
+def _upload(row: sqlite3.Row) -> StoredUpload:
+    return StoredUpload(
+        id=row["id"],
+        encounter_id=row["encounter_id"],
+        length=row["length"],
+        metadata=json.loads(row["metadata"]),
+        filename=row["filename"],
+        state=UploadPhase(row["state"]),
+        created_by=row["created_by"],
+        device_id=row["device_id"],
+        created_at=row["created_at"],
+        expires_at=row["expires_at"],
+        asset_id=row["asset_id"],
+        error=row["error"],
+    )
+
+
+def get_upload(conn: sqlite3.Connection, upload_id: str) -> StoredUpload:
+    """The upload with this id; NotFound if there is none."""
+    row = conn.execute("SELECT * FROM uploads WHERE id = ?", (upload_id,)).fetchone()
+    if row is None:
+        raise NotFound(f"no upload {upload_id}")
+    return _upload(row)
+
+
+def open_uploads(conn: sqlite3.Connection) -> list[StoredUpload]:
+    """The uploads still receiving bytes (or all received and not yet recorded)."""
+    return [_upload(r) for r in conn.execute("SELECT * FROM uploads WHERE state = 'open'").fetchall()]
+
+
+def insert_upload(conn: sqlite3.Connection, upload: StoredUpload) -> None:
+    """Write a new upload row, inside the caller's transaction."""
+    conn.execute(
+        "INSERT INTO uploads (id, encounter_id, length, metadata, filename, state, created_by, device_id,"
+        " created_at, expires_at) VALUES (?,?,?,?,?,?,?,?,?,?)",
+        (
+            upload.id,
+            upload.encounter_id,
+            upload.length,
+            json.dumps(upload.metadata),
+            upload.filename,
+            upload.state.value,
+            upload.created_by,
+            upload.device_id,
+            upload.created_at,
+            upload.expires_at,
+        ),
+    )
+
+
+def mark_upload_complete(conn: sqlite3.Connection, upload_id: str, asset_id: str) -> None:
+    """An open upload becomes complete, naming the asset it was stored as."""
+    conn.execute(
+        "UPDATE uploads SET state = 'complete', asset_id = ?, error = NULL WHERE id = ? AND state = 'open'",
+        (asset_id, upload_id),
+    )
+
+
+def end_upload(conn: sqlite3.Connection, upload_id: str, phase: UploadPhase, error: str | None) -> bool:
+    """Move an open upload to its end state; False if it had already ended another way."""
+    cur = conn.execute(
+        "UPDATE uploads SET state = ?, error = ? WHERE id = ? AND state = 'open'",
+        (phase.value, error, upload_id),
+    )
+    return cur.rowcount == 1
