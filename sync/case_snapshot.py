@@ -10,6 +10,7 @@ import msgspec
 
 from base import folders
 from base.folders import media_root
+from base.storage import assets as asset_rows
 from base.storage import records as store
 from base.storage.blobs import MediaStore
 from schemas.base import iso, utcnow
@@ -115,6 +116,6 @@ def _pictures(conn: sqlite3.Connection, media: MediaStore, encounter_id: str, li
     suffixes = {"image/jpeg": ".jpg", "image/png": ".png", "image/heic": ".heic"}
     return [
         PartData(f"photos/{p.id}{suffixes.get(p.media_type, '')}", media.blob(p.sha256).read_bytes())
-        for p in store.encounter_photos(conn, encounter_id, limit)
+        for p in asset_rows.encounter_photos(conn, encounter_id, limit)
         if media.blob(p.sha256).exists()
     ]

@@ -16,9 +16,9 @@ import numpy as np
 import pytest
 
 import gateway.services.frames as frames_service
+from base.storage import assets as asset_rows
 from base.storage import audit, blobs
 from base.storage.blobs import MediaStore
-from gateway.storage import assets as asset_rows
 from harness.bodies import encounter_body, patient_body
 from harness.processes import REPO
 from processing.capture import media

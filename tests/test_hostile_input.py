@@ -15,6 +15,7 @@ import pytest
 import schemas
 from harness.bodies import encounter_body, patient_body
 from harness.processes import PASSWORD, add_user_cli
+from harness.sites import wait_for
 from schemas.accounts import Username
 from schemas.base import Id
 from schemas.ids import uuid7
@@ -50,6 +51,8 @@ def test_deeply_nested_json_is_a_400_with_one_warning_line_on_anonymous_and_auth
         assert r.headers["content-type"].startswith("application/problem+json")
         assert "nested too deeply" in r.json()["detail"]
     assert http.get("/health").status_code == 200  # still serving
+    # The server's log lines go through a queue (Litestar's logging config): they may land just after the answer.
+    wait_for(lambda: gw.log.read_text().count("nested too deeply") >= 4, 10, "the four warning lines")
     log = gw.log.read_text()
     assert log.count("nested too deeply") == 4 and "Traceback" not in log and "RecursionError" not in log
 

@@ -165,25 +165,6 @@ def changes_since(conn: sqlite3.Connection, cursor: int, limit: int, kinds: Iter
     return [row_to_record(r) for r in rows]
 
 
-class EncounterPhoto(msgspec.Struct, frozen=True, kw_only=True):
-    """A photo stored for an encounter, as far as sending it needs: which blob holds it and its media type."""
-
-    id: str
-    sha256: str
-    """Of the bytes: the name of the blob in the media store."""
-    media_type: str
-
-
-def encounter_photos(conn: sqlite3.Connection, encounter_id: str, limit: int) -> list[EncounterPhoto]:
-    """The encounter's photos in the order they were taken in (up to `limit`), not its videos or frames."""
-    rows = conn.execute(
-        "SELECT id, sha256, media_type FROM assets WHERE encounter_id = ? AND kind = 'photo'"
-        " ORDER BY created_at, id LIMIT ?",
-        (encounter_id, limit),
-    ).fetchall()
-    return [EncounterPhoto(id=r["id"], sha256=r["sha256"], media_type=r["media_type"]) for r in rows]
-
-
 class AppliedMutation(msgspec.Struct, frozen=True, kw_only=True):
     """A phone's mutation the gateway already applied, remembered so that a retried push gets the same answer."""
 

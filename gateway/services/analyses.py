@@ -14,6 +14,7 @@ import msgspec
 import numpy as np
 
 from base.accounts.permissions import Principal, require_capture, require_read
+from base.storage import assets as asset_rows
 from base.storage import audit
 from base.storage import records as store
 from gateway.jobs import folders, timeline
@@ -21,7 +22,6 @@ from gateway.jobs.capture_time import capture_time
 from gateway.jobs.queue import JobQueue
 from gateway.services.assets import AssetService
 from gateway.services.validation import require_live_encounter
-from gateway.storage import assets as asset_rows
 from gateway.storage.database import Database
 from processing.stages import code_digest
 from schemas.analysis import AnalysisResult

@@ -11,11 +11,12 @@ import sqlite3
 from pathlib import Path
 
 from base.accounts.permissions import Principal, require_read
+from base.storage import assets as asset_rows
 from base.storage import audit
 from base.storage.blobs import MediaStore, sha256_of
 from base.storage.records import get_head
 from gateway.services.validation import require_live_encounter
-from gateway.storage import assets as asset_rows
+from gateway.storage import uploads as upload_rows
 from gateway.storage.database import Database
 from processing.capture.media import check_photo, check_video, sniff
 from processing.capture.quality import gate_bytes
@@ -114,7 +115,7 @@ class AssetService:
                 conn, principal, encounter_id, kind, media_type, sha, size, filename, metadata, verdict, source_asset_id
             )
             if upload_id is not None:
-                asset_rows.mark_upload_complete(conn, upload_id, asset_id)
+                upload_rows.mark_upload_complete(conn, upload_id, asset_id)
             return asset_rows.get_asset(conn, asset_id)
 
     def get(self, principal: Principal, asset_id: str) -> Asset:

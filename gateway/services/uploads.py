@@ -24,7 +24,7 @@ from base.storage import accounts as account_rows
 from base.storage.blobs import MediaStore
 from gateway.services.assets import AssetService
 from gateway.services.validation import require_live_encounter
-from gateway.storage import assets as asset_rows
+from gateway.storage import uploads as upload_rows
 from gateway.storage.database import Database
 from schemas.base import iso, utcnow
 from schemas.capture import Asset, StoredUpload, UploadPhase
@@ -103,7 +103,7 @@ class UploadService:
         upload_id, now = uuid7(), utcnow()
         with self.db.write() as conn:
             require_live_encounter(conn, encounter_id)
-            open_uploads = asset_rows.open_uploads(conn)
+            open_uploads = upload_rows.open_uploads(conn)
             if sum(u.created_by == principal.user_id for u in open_uploads) >= limits.max_open_per_user:
                 raise TooManyAttempts(
                     f"you have {limits.max_open_per_user} unfinished uploads: finish or cancel some first",
@@ -124,7 +124,7 @@ class UploadService:
                 asset_id=None,
                 error=None,
             )
-            asset_rows.insert_upload(conn, upload)
+            upload_rows.insert_upload(conn, upload)
             self.store.create_part(upload_id)
         return self._state(self._row(upload_id))
 
@@ -197,7 +197,7 @@ class UploadService:
         """Complete full uploads left unrecorded by a crash; drop expired unfinished ones. (completed, dropped)"""
         completed = dropped = 0
         now = iso(utcnow())
-        for upload in asset_rows.open_uploads(self.db.connection()):
+        for upload in upload_rows.open_uploads(self.db.connection()):
             try:
                 if self._held(upload.id) == upload.length:
                     completed += self.recover_one(upload.id) is not None
@@ -233,7 +233,7 @@ class UploadService:
         return part.stat().st_size if part.exists() else 0
 
     def _row(self, upload_id: str) -> StoredUpload:
-        return asset_rows.get_upload(self.db.connection(), upload_id)
+        return upload_rows.get_upload(self.db.connection(), upload_id)
 
     def _owned_row(self, principal: Principal, upload_id: str) -> StoredUpload:
         """Uploads belong to who started them, or to the phone they were started from (shared clinic phones)."""
@@ -268,4 +268,4 @@ class UploadService:
     def _finish(self, upload_id: str, phase: UploadPhase, *, error: str | None = None) -> bool:
         """Move an open upload to its end state; False if it had already ended another way."""
         with self.db.write() as conn:
-            return asset_rows.end_upload(conn, upload_id, phase, error)
+            return upload_rows.end_upload(conn, upload_id, phase, error)

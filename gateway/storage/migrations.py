@@ -196,7 +196,7 @@ def m008_must_change_password(db: Database) -> None:
 @migrations()
 def m009_capture_time_and_attempts(db: Database) -> None:
     """When each job's pictures were taken (JSON of schemas.jobs.CaptureTime; NULL for older jobs), and every
-    try of a job with how it ended (gateway/jobs/attempts.py)."""
+    try of a job with how it ended (gateway/jobs/attempts.py, its SQL in gateway/storage/attempts.py)."""
     db.execute("ALTER TABLE analysis_jobs ADD COLUMN captured TEXT")
     db.execute(
         """

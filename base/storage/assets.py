@@ -1,4 +1,5 @@
-"""Rows of the capture intake: stored assets (photos, videos, frames), their videos' frame progress, and uploads.
+"""The assets table: stored photos, videos and frames, their videos' frame progress, and the photos a case bundle
+carries. The gateway's intake writes it; replication reads it (so it is shared, below both).
 
 Knows SQL, not capture rules: the services decide what to store and write the audit entries, in the same
 transaction, through the connection they pass in.
@@ -6,14 +7,13 @@ transaction, through the connection they pass in.
 
 from __future__ import annotations
 
-import json
 import sqlite3
 from dataclasses import dataclass
 
 import msgspec
 
 from schemas.base import iso, utcnow
-from schemas.capture import Asset, AssetKind, CaptureMetadata, MediaType, QualityVerdict, StoredUpload, UploadPhase
+from schemas.capture import Asset, AssetKind, CaptureMetadata, MediaType, QualityVerdict
 from schemas.errors import NotFound
 
 _verdict = msgspec.json.Decoder(QualityVerdict)
@@ -124,71 +124,20 @@ def set_frames_done(conn: sqlite3.Connection, video_id: str, error: str | None) 
     )
 
 
-# uploads -----------------------------------------------------------------------------------
+class EncounterPhoto(msgspec.Struct, frozen=True, kw_only=True):
+    """A photo stored for an encounter, as far as sending it needs: which blob holds it and its media type."""
+
+    id: str
+    sha256: str
+    """Of the bytes: the name of the blob in the media store."""
+    media_type: str
 
 
-def _upload(row: sqlite3.Row) -> StoredUpload:
-    return StoredUpload(
-        id=row["id"],
-        encounter_id=row["encounter_id"],
-        length=row["length"],
-        metadata=json.loads(row["metadata"]),
-        filename=row["filename"],
-        state=UploadPhase(row["state"]),
-        created_by=row["created_by"],
-        device_id=row["device_id"],
-        created_at=row["created_at"],
-        expires_at=row["expires_at"],
-        asset_id=row["asset_id"],
-        error=row["error"],
-    )
-
-
-def get_upload(conn: sqlite3.Connection, upload_id: str) -> StoredUpload:
-    """The upload with this id; NotFound if there is none."""
-    row = conn.execute("SELECT * FROM uploads WHERE id = ?", (upload_id,)).fetchone()
-    if row is None:
-        raise NotFound(f"no upload {upload_id}")
-    return _upload(row)
-
-
-def open_uploads(conn: sqlite3.Connection) -> list[StoredUpload]:
-    """The uploads still receiving bytes (or all received and not yet recorded)."""
-    return [_upload(r) for r in conn.execute("SELECT * FROM uploads WHERE state = 'open'").fetchall()]
-
-
-def insert_upload(conn: sqlite3.Connection, upload: StoredUpload) -> None:
-    """Write a new upload row, inside the caller's transaction."""
-    conn.execute(
-        "INSERT INTO uploads (id, encounter_id, length, metadata, filename, state, created_by, device_id,"
-        " created_at, expires_at) VALUES (?,?,?,?,?,?,?,?,?,?)",
-        (
-            upload.id,
-            upload.encounter_id,
-            upload.length,
-            json.dumps(upload.metadata),
-            upload.filename,
-            upload.state.value,
-            upload.created_by,
-            upload.device_id,
-            upload.created_at,
-            upload.expires_at,
-        ),
-    )
-
-
-def mark_upload_complete(conn: sqlite3.Connection, upload_id: str, asset_id: str) -> None:
-    """An open upload becomes complete, naming the asset it was stored as."""
-    conn.execute(
-        "UPDATE uploads SET state = 'complete', asset_id = ?, error = NULL WHERE id = ? AND state = 'open'",
-        (asset_id, upload_id),
-    )
-
-
-def end_upload(conn: sqlite3.Connection, upload_id: str, phase: UploadPhase, error: str | None) -> bool:
-    """Move an open upload to its end state; False if it had already ended another way."""
-    cur = conn.execute(
-        "UPDATE uploads SET state = ?, error = ? WHERE id = ? AND state = 'open'",
-        (phase.value, error, upload_id),
-    )
-    return cur.rowcount == 1
+def encounter_photos(conn: sqlite3.Connection, encounter_id: str, limit: int) -> list[EncounterPhoto]:
+    """The encounter's photos in the order they were taken in (up to `limit`), not its videos or frames."""
+    rows = conn.execute(
+        "SELECT id, sha256, media_type FROM assets WHERE encounter_id = ? AND kind = 'photo'"
+        " ORDER BY created_at, id LIMIT ?",
+        (encounter_id, limit),
+    ).fetchall()
+    return [EncounterPhoto(id=r["id"], sha256=r["sha256"], media_type=r["media_type"]) for r in rows]
