@@ -33,10 +33,6 @@ class SiteServices(Protocol):
         ...
 
 
-def provide_services(request: Request) -> SiteServices:
-    return request.app.state.services
-
-
 def client_address(request: Request) -> str:
     return request.client.host if request.client else "unknown"
 
