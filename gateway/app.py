@@ -15,6 +15,7 @@ from base.web.health import health
 from base.web.openapi import ClosedStructSchemaPlugin
 from gateway.controllers.analyses import AnalysisController
 from gateway.controllers.assets import AssetController
+from gateway.controllers.decision_support import DecisionSupportController
 from gateway.controllers.parts import PART_CONTROLLERS
 from gateway.controllers.records import EncounterController, PatientController
 from gateway.controllers.sync import SyncController
@@ -41,6 +42,7 @@ def create_app(config: Config, *, start_workers: bool = False) -> Litestar:
             PatientController,
             EncounterController,
             *PART_CONTROLLERS,
+            DecisionSupportController,
             SyncController,
             UploadController,
             AssetController,

@@ -16,6 +16,7 @@ from base.storage.blobs import MediaStore
 from gateway.services import audit_trail
 from gateway.services.analyses import AnalysisService
 from gateway.services.assets import AssetService
+from gateway.services.decision_support import DecisionSupportService
 from gateway.services.frames import FrameService
 from gateway.services.phone_sync import PhoneSync
 from gateway.services.records import RecordService
@@ -32,6 +33,7 @@ class Services:
     db: Database
     accounts: AccountService
     records: RecordService
+    decision_support: DecisionSupportService
     phone_sync: PhoneSync
     assets: AssetService
     uploads: UploadService
@@ -54,6 +56,7 @@ class Services:
             db=db,
             accounts=AccountService(db, config.security),
             records=records,
+            decision_support=DecisionSupportService(db, config),
             phone_sync=PhoneSync(records, config.gateway.page_max),
             assets=assets,
             uploads=UploadService(db, config, store, assets),

@@ -22,11 +22,24 @@ class Allergy(Message):
 
 
 class TetanusStatus(enum.StrEnum):
+    """The older, summary form of the tetanus history, kept as recorded; `tetanus_doses` and the time since the
+    last dose are what the wound-management table needs (processing/clinical/tetanus.py reads this one only when
+    those are not recorded)."""
+
     up_to_date = "up_to_date"
     """Last dose within 5 years (burns are tetanus-prone wounds)."""
     not_up_to_date = "not_up_to_date"
     never_immunised = "never_immunised"
     unknown = "unknown"
+
+
+class TetanusDoses(enum.StrEnum):
+    """Doses of tetanus-toxoid-containing vaccine received before this injury (the table's rows)."""
+
+    unknown = "unknown"
+    fewer_than_three = "fewer_than_three"
+    """None, one or two doses."""
+    three_or_more = "three_or_more"
 
 
 class SocialContext(Message):
@@ -49,7 +62,14 @@ class Intake(Message):
     allergies: list[Allergy] = []
     no_known_allergies: bool = False
     tetanus_status: TetanusStatus = TetanusStatus.unknown
+    """The older summary; record tetanus_doses and the last dose instead."""
+    tetanus_doses: TetanusDoses = TetanusDoses.unknown
     last_tetanus_dose: dt.date | None = None
+    """Date of the last tetanus-toxoid-containing dose, when known."""
+    years_since_last_tetanus_dose: Annotated[float, msgspec.Meta(ge=0, le=130)] | None = None
+    """When only "about N years ago" is known; give this or last_tetanus_dose, not both."""
+    severe_immunodeficiency: bool | None = None
+    """HIV infection or other severe immunodeficiency: changes the tetanus immune globulin advice."""
     social: SocialContext = msgspec.field(default_factory=SocialContext)
 
 

@@ -9,6 +9,7 @@ import msgspec
 from schemas.base import Frozen, Id, ShortText, Timestamp
 from schemas.burn_chart import BurnChart
 from schemas.clinical_results import Assessment
+from schemas.decision_support import DecisionSupport
 from schemas.jobs import BurnAnalysis
 from schemas.patient import Encounter, Patient
 from schemas.record_parts import Intake, Mechanism, PrimarySurvey, Resuscitation, SecondarySurvey
@@ -30,6 +31,9 @@ class RecordKind(enum.StrEnum):
     """A finished 3D burn analysis of an encounter's pictures; written by the gateway's workers only."""
     consultation = "consultation"
     """A burn-center consultant's note on an encounter, as received over sync; written by the gateway only."""
+    decision_support = "decision_support"
+    """Recommendations computed from the record, each pending, accepted or declined by a clinician; written by the
+    gateway only (a clinician's act through POST .../decision-support/acts)."""
 
     @property
     def label(self) -> str:
@@ -49,6 +53,7 @@ RECORD_TYPES: dict[RecordKind, type[msgspec.Struct]] = {
     RecordKind.assessment: Assessment,
     RecordKind.burn_analysis: BurnAnalysis,
     RecordKind.consultation: Consultation,
+    RecordKind.decision_support: DecisionSupport,
 }
 
 # Encounter parts are one per encounter: their record id is the encounter's id.
@@ -61,8 +66,11 @@ ENCOUNTER_PARTS = frozenset(
         RecordKind.burn_chart,
         RecordKind.resuscitation,
         RecordKind.assessment,
+        RecordKind.decision_support,
     }
 )
+COMPUTED_PARTS = frozenset({RecordKind.assessment, RecordKind.decision_support})
+"""Encounter parts the gateway computes from the others."""
 
 
 class RecordMeta(Frozen):

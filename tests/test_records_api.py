@@ -223,7 +223,7 @@ def test_full_record_returns_every_part(client, clin, encounter):
     client.put(f"/api/v1/encounters/{eid}/mechanism", json=mech, headers={**clin, "If-None-Match": "*"})
     full = client.get(f"/api/v1/encounters/{eid}/record", headers=clin).json()
     assert full["encounter"]["data"]["id"] == eid
-    assert set(full["parts"]) == {"intake", "mechanism", "assessment"}
+    assert set(full["parts"]) == {"intake", "mechanism", "assessment", "decision_support"}
     assert full["parts"]["intake"]["data"]["medications"] == [{"name": "salbutamol", "dose": None}]
 
 

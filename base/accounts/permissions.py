@@ -11,7 +11,12 @@ from schemas.errors import Forbidden
 from schemas.records import Record, RecordKind
 
 ALL_KINDS = frozenset(RecordKind)
-CLIENT_WRITABLE = ALL_KINDS - {RecordKind.assessment, RecordKind.burn_analysis, RecordKind.consultation}
+CLIENT_WRITABLE = ALL_KINDS - {
+    RecordKind.assessment,
+    RecordKind.burn_analysis,
+    RecordKind.consultation,
+    RecordKind.decision_support,
+}
 
 READ: dict[Role, frozenset[RecordKind]] = {
     Role.clinician: ALL_KINDS,
@@ -36,6 +41,8 @@ DELETE: dict[Role, frozenset[RecordKind]] = {
 }
 # Nurses record fluid given; choosing the formula is a prescription.
 PRESCRIPTION_FIELDS = {RecordKind.resuscitation: ("formula", "custom_ml_per_kg_per_percent")}
+# Decision support is acted on (accepted, declined) by the clinician responsible for the patient.
+DECIDE = frozenset({Role.clinician})
 # Who may upload photos and videos of a burn (and read them back).
 CAPTURE = frozenset({Role.clinician, Role.nurse})
 ADMIN_ONLY = frozenset({"manage_users", "manage_devices", "read_audit"})
@@ -88,6 +95,11 @@ def check_field_rules(principal: Principal, kind: RecordKind, struct, current: R
     for name in fields:
         if msgspec.to_builtins(getattr(struct, name)) != baseline.get(name):
             raise Forbidden(f"a {principal.role.value} may record fluid given but not change {name.replace('_', ' ')}")
+
+
+def require_decide(principal: Principal) -> None:
+    if principal.role not in DECIDE:
+        raise Forbidden(f"a {principal.role.value} may not accept or decline recommendations: a clinician does")
 
 
 def require_capture(principal: Principal) -> None:

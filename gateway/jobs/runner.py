@@ -28,6 +28,7 @@ from gateway.jobs import folders
 from gateway.jobs.capture_time import hours_since_injury
 from gateway.jobs.queue import Claim, JobQueue
 from gateway.jobs.timeline import update_track
+from gateway.services.decision_support import refresh_patient
 from gateway.storage import jobs
 from gateway.storage.database import Database
 from processing.analysis.pipeline import Patient
@@ -87,6 +88,10 @@ def run(config: Config, claim: Claim) -> JobState:
                 update_track(db, config, job.patient_id)
             except Exception:
                 log.exception("healing track of patient %s not updated", job.patient_id)
+            try:
+                refresh_patient(db, config, job.patient_id)
+            except Exception:
+                log.exception("decision support of patient %s not refreshed", job.patient_id)
         return state
     finally:
         db.close()

@@ -74,9 +74,13 @@ def update_track(db: Database, config: Config, patient_id: str) -> Path | None:
     return path
 
 
+def track_path(config: Config, patient_id: str) -> Path:
+    return folders.patient_dir(config, patient_id) / TRACK
+
+
 def read_track(config: Config, patient_id: str) -> TrackResult:
     """The stored track as the API serves it: each visit's analysis as its API link, not the gateway's folder."""
-    path = folders.patient_dir(config, patient_id) / TRACK
+    path = track_path(config, patient_id)
     if not path.exists():
         raise NotFound(f"patient {patient_id} has no measured visit yet: the track starts with the first analysis")
     track = msgspec.json.decode(path.read_bytes(), type=TrackResult)

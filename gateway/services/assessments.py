@@ -9,13 +9,14 @@ import msgspec
 from base.accounts.permissions import Principal
 from base.storage import audit
 from base.storage import records as store
+from gateway.services import decision_support
 from processing.clinical.assessment import assess
 from schemas.base import iso, utcnow
 from schemas.clinical_results import InputRef
 from schemas.config import Config
-from schemas.records import ENCOUNTER_PARTS, RECORD_TYPES, Record, RecordKind
+from schemas.records import COMPUTED_PARTS, ENCOUNTER_PARTS, RECORD_TYPES, Record, RecordKind
 
-_INPUT_PARTS = ENCOUNTER_PARTS - {RecordKind.assessment}
+_INPUT_PARTS = ENCOUNTER_PARTS - COMPUTED_PARTS
 
 
 def _struct(record: Record):
@@ -71,3 +72,4 @@ def refresh_assessments(
             after_version=version,
             content_hash=store.version_content_hash(data_json.decode(), False, None),
         )
+        decision_support.refresh(conn, principal, encounter_id, config)

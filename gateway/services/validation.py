@@ -17,7 +17,7 @@ from schemas.config import Config
 from schemas.errors import InvalidInput, NotFound
 from schemas.patient import Encounter, Patient
 from schemas.problem import FieldProblem
-from schemas.record_parts import PrimarySurvey, Resuscitation, SecondarySurvey
+from schemas.record_parts import Intake, PrimarySurvey, Resuscitation, SecondarySurvey
 from schemas.records import RECORD_TYPES, Record, RecordKind
 
 _AT_PATH = re.compile(r"^(?P<msg>.*?)(?: - at `(?P<path>[^`]*)`)?$", re.S)
@@ -69,6 +69,8 @@ def check(conn: sqlite3.Connection, kind: RecordKind, record_id: str, struct, co
         _not_future(struct.assessed_at, "$.assessed_at", config)
     if isinstance(struct, BurnChart):
         validate_chart(struct)
+    if isinstance(struct, Intake):
+        _check_intake(struct)
     if isinstance(struct, Resuscitation):
         validate_resuscitation(struct)
         for i, given in enumerate(struct.fluid_given):
@@ -82,6 +84,17 @@ def _check_patient(record_id: str, patient: Patient) -> None:
     # The gateway's UTC date can be a day behind the bedside's local date.
     if patient.date_of_birth is not None and patient.date_of_birth > utcnow().date() + dt.timedelta(days=1):
         raise _bad("$.date_of_birth", "date of birth is in the future")
+
+
+def _check_intake(intake: Intake) -> None:
+    last = intake.last_tetanus_dose
+    if last is not None and last > utcnow().date() + dt.timedelta(days=1):
+        raise _bad("$.last_tetanus_dose", "the last tetanus dose is dated in the future")
+    if last is not None and intake.years_since_last_tetanus_dose is not None:
+        raise _bad(
+            "$.years_since_last_tetanus_dose",
+            "give the date of the last tetanus dose or the years since it, not both",
+        )
 
 
 def _check_encounter(conn: sqlite3.Connection, record_id: str, enc: Encounter, config: Config) -> None:

@@ -33,12 +33,12 @@ from schemas.config import ClinicalConfig
 from schemas.errors import InvalidInput
 from schemas.patient import Encounter, Patient
 from schemas.record_parts import FluidFormula
-from schemas.records import ENCOUNTER_PARTS, RECORD_TYPES, RecordKind
+from schemas.records import COMPUTED_PARTS, ENCOUNTER_PARTS, RECORD_TYPES, RecordKind
 
 T = TypeVar("T")
 
 DAYS_PER_YEAR = 365.25
-INPUT_PARTS = ENCOUNTER_PARTS - {RecordKind.assessment}
+INPUT_PARTS = ENCOUNTER_PARTS - COMPUTED_PARTS
 """The encounter parts the calculators read (the assessment is their output)."""
 
 MISSING_AGE = "patient's date of birth or estimated age (needed for %TBSA and the fluid plan)"

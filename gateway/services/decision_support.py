@@ -1,0 +1,187 @@
+"""Stores each encounter's decision support with the record versions it read, and clinicians' acts on it.
+
+Recomputed in the transaction of every write that can change it (a record part, a finished analysis), and when a
+report is made (the cooling window and the days since injury move with the clock). A new version is written
+only when the advice changed; acts are carried over as processing/clinical/decision_support.py says.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import sqlite3
+from pathlib import Path
+
+import msgspec
+
+from base.accounts.permissions import Principal, require_decide, require_read, require_write
+from base.storage import audit
+from base.storage import records as store
+from gateway.jobs import timeline
+from processing.clinical import decision_support as rules
+from processing.clinical.decision_inputs import DecisionInputs, Versioned
+from schemas.base import iso, utcnow
+from schemas.clinical_results import InputRef
+from schemas.config import Config
+from schemas.decision_support import DecisionSupport, RecommendationAct
+from schemas.errors import Conflict, NotFound, VersionMismatch
+from schemas.longitudinal import TrackResult
+from schemas.records import RECORD_TYPES, Record, RecordKind
+
+KIND = RecordKind.decision_support
+_PARTS = {
+    RecordKind.intake: "intake",
+    RecordKind.primary_survey: "primary",
+    RecordKind.secondary_survey: "secondary",
+    RecordKind.mechanism: "mechanism",
+    RecordKind.burn_chart: "chart",
+    RecordKind.resuscitation: "resuscitation",
+    RecordKind.assessment: "assessment",
+}
+
+
+def _versioned(record: Record) -> Versioned:
+    value = msgspec.convert(record.data, RECORD_TYPES[record.meta.kind])
+    return Versioned(value, InputRef(kind=record.meta.kind.value, id=record.meta.id, version=record.meta.version))
+
+
+def _track(conn: sqlite3.Connection, config: Config, patient_id: str) -> tuple[TrackResult | None, list[InputRef]]:
+    path = timeline.track_path(config, patient_id)
+    if not path.exists():
+        return None, []
+    track = msgspec.json.decode(path.read_bytes(), type=TrackResult)
+    refs = []
+    for session in track.sessions:
+        job_id = Path(session.analysis).parent.name
+        head = store.find_head(conn, RecordKind.burn_analysis, job_id)
+        if head is not None:
+            refs.append(InputRef(kind=head.meta.kind.value, id=job_id, version=head.meta.version))
+    return track, refs
+
+
+def gather(conn: sqlite3.Connection, config: Config, encounter_id: str, as_of: dt.datetime) -> DecisionInputs:
+    """What the rules read, from the current versions of the encounter's record."""
+    encounter = store.get_head(conn, RecordKind.encounter, encounter_id)
+    patient = store.get_head(conn, RecordKind.patient, encounter.data["patient_id"])
+    heads = store.heads_of_children(conn, encounter_id, _PARTS)
+    parts = {_PARTS[kind]: _versioned(r) for kind, r in heads.items() if not r.meta.deleted}
+    assessment = parts.get("assessment")
+    analyses = [
+        _versioned(r)
+        for r in store.list_heads(conn, RecordKind.burn_analysis, parent_id=encounter_id, limit=None)
+        if not r.meta.deleted
+    ]
+    track, track_refs = _track(conn, config, patient.meta.id)
+    return DecisionInputs(
+        patient=_versioned(patient),
+        encounter=_versioned(encounter),
+        as_of=as_of,
+        age_years=assessment.value.age_years if assessment else None,
+        analyses=analyses,
+        track=track,
+        track_refs=track_refs,
+        **parts,
+    )
+
+
+def refresh(conn: sqlite3.Connection, principal: Principal | None, encounter_id: str, config: Config) -> Record:
+    """Recompute the encounter's decision support as of now; store a new version if the advice changed."""
+    now = utcnow()
+    fresh = rules.recommend(gather(conn, config, encounter_id, now), computed_at=now)
+    current = store.find_head(conn, KIND, encounter_id)
+    previous = msgspec.convert(current.data, DecisionSupport) if current else None
+    result = rules.carry_over(previous, fresh)
+    if previous is not None and rules.same_advice(previous, result):
+        return current
+    return _write(conn, principal, encounter_id, result, current, "decision_support.compute", "")
+
+
+def _write(
+    conn: sqlite3.Connection,
+    principal: Principal | None,
+    encounter_id: str,
+    data: DecisionSupport,
+    current: Record | None,
+    action: str,
+    detail: str,
+) -> Record:
+    version = current.meta.version + 1 if current else 1
+    data_json = msgspec.json.encode(data)
+    record = store.insert_version(
+        conn,
+        kind=KIND,
+        record_id=encounter_id,
+        version=version,
+        parent_id=encounter_id,
+        data_json=data_json,
+        created_at=iso(current.meta.created_at) if current else None,
+        updated_by=principal.username if principal else audit.SERVER_USER,
+        device_id=principal.device_id if principal else None,
+    )
+    audit.append(
+        conn,
+        action=action,
+        user_id=principal.user_id if principal else None,
+        device_id=principal.device_id if principal else None,
+        kind=KIND.value,
+        record_id=encounter_id,
+        before_version=current.meta.version if current else None,
+        after_version=version,
+        detail=detail,
+        content_hash=store.version_content_hash(data_json.decode(), False, None),
+    )
+    return record
+
+
+def record_act(conn: sqlite3.Connection, principal: Principal, encounter_id: str, act, if_match: int) -> Record:
+    """One recommendation accepted or declined, as the next version of the record (If-Match: its version)."""
+    current = store.find_head(conn, KIND, encounter_id)
+    if current is None:
+        raise NotFound(f"encounter {encounter_id} has no decision support yet")
+    if current.meta.version != if_match:
+        raise VersionMismatch(
+            f"you acted on version {if_match} of the recommendations but they are now at version "
+            f"{current.meta.version}: read them again (the advice may have changed)",
+            current=current,
+        )
+    data = rules.apply_act(msgspec.convert(current.data, DecisionSupport), act, principal.username, utcnow())
+    detail = f"{act.key}: {act.state}" + (f": {act.reason.strip()}" if act.reason.strip() else "")
+    return _write(conn, principal, encounter_id, data, current, f"recommendation.{act.state}", detail)
+
+
+def refresh_patient(db, config: Config, patient_id: str) -> None:
+    """After an analysis of the patient: every live encounter's decision support (the healing prompts moved)."""
+    with db.write() as conn:
+        for encounter in store.list_heads(conn, RecordKind.encounter, parent_id=patient_id, limit=None):
+            if not encounter.meta.deleted:
+                refresh(conn, None, encounter.meta.id, config)
+
+
+class DecisionSupportService:
+    def __init__(self, db, config: Config):
+        self.db = db
+        self.config = config
+
+    def get(self, principal: Principal, encounter_id: str) -> Record:
+        require_read(principal, KIND)
+        conn = self.db.connection()
+        store.get_head(conn, RecordKind.encounter, encounter_id)
+        head = store.find_head(conn, KIND, encounter_id)
+        if head is None:
+            raise NotFound(f"encounter {encounter_id} has no decision support yet: record its intake or burn chart")
+        return head
+
+    def recompute(self, principal: Principal, encounter_id: str) -> Record:
+        """As of now: the cooling window and the days since injury move with the clock."""
+        require_read(principal, KIND)
+        require_write(principal, RecordKind.intake)
+        with self.db.write() as conn:
+            encounter = store.get_head(conn, RecordKind.encounter, encounter_id)
+            if encounter.meta.deleted:
+                raise Conflict("this encounter was withdrawn: its decision support is no longer recomputed")
+            return refresh(conn, principal, encounter_id, self.config)
+
+    def act(self, principal: Principal, encounter_id: str, act: RecommendationAct, if_match: int) -> Record:
+        require_decide(principal)
+        with self.db.write() as conn:
+            store.get_head(conn, RecordKind.encounter, encounter_id)
+            return record_act(conn, principal, encounter_id, act, if_match)
