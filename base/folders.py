@@ -28,6 +28,11 @@ def work_root(config: Config) -> Path:
     return beside(config.gateway.database, config.jobs.work_dir, "burnedge-analyses")
 
 
+def reports_root(config: Config) -> Path:
+    """The clinical reports made: [report] reports_dir, or "burnedge-reports" beside the database."""
+    return beside(config.gateway.database, config.report.reports_dir, "burnedge-reports")
+
+
 def job_dir(config: Config, job_id: str) -> Path:
     return work_root(config) / job_id
 

@@ -11,7 +11,7 @@ from pathlib import Path
 import msgspec
 
 from base import __version__
-from burnedge import cli_analysis, cli_backup, cli_sync, cli_users
+from burnedge import cli_analysis, cli_backup, cli_report, cli_sync, cli_users
 from burnedge.cli_help import examples
 from schemas.config import Config, load_config
 from schemas.errors import AuthenticationFailed, BurnedgeError, Conflict, InvalidInput, NotFound
@@ -343,6 +343,7 @@ def build_parser() -> argparse.ArgumentParser:
     cli_sync.add_commands(sub, _config)
     cli_backup.add_commands(sub, _config)
     cli_users.add_commands(sub, _config)
+    cli_report.add_commands(sub, _config)
 
     phantom = sub.add_parser(
         "phantom",

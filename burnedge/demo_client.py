@@ -58,6 +58,9 @@ class GatewayClient:
     def get(self, path: str, what: str) -> dict | list:
         return self._check(self.http.get(path), what).json()
 
+    def get_bytes(self, path: str, what: str) -> bytes:
+        return self._check(self.http.get(path), what).content
+
     def upload(self, path: Path, encounter_id: str, attempts: int = 5, data: bytes | None = None) -> dict:
         """One photo over tus (`data` instead of the file's bytes when given); a dropped connection resumes from the
         offset the gateway has. Returns the upload."""

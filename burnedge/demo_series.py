@@ -20,7 +20,8 @@ from pathlib import Path
 import httpx
 import uvicorn
 
-from burnedge.demo import DEMO_PATIENT_ID, DEMO_VISIT_IDS, SERIES_DAYS
+from base.storage.durable import replace_atomically
+from burnedge.demo import DEMO_ENCOUNTER_ID, DEMO_PATIENT_ID, DEMO_VISIT_IDS, SERIES_DAYS
 from burnedge.demo_client import GatewayClient, GatewayError
 from burnedge.demo_progress import ProgressBar
 from gateway.app import create_app
@@ -207,6 +208,9 @@ def run_demo(config: Config, options: SeriesOptions, password: str, *, keep_serv
             f"  ({gateway.url}/api/v1/analyses/{job['id']}/artifacts)"
             for day, job in zip(SERIES_DAYS, jobs, strict=True)
         ]
+        report = Path(config.gateway.database).resolve().parent / "burnedge-demo-report.pdf"
+        pdf = client.get_bytes(f"/api/v1/encounters/{DEMO_ENCOUNTER_ID}/report.pdf", "make the clinical report")
+        replace_atomically(report, pdf)
         text = "\n".join(
             [
                 "",
@@ -221,6 +225,8 @@ def run_demo(config: Config, options: SeriesOptions, password: str, *, keep_serv
                 f"Healing track: {patient_dir(config, DEMO_PATIENT_ID) / 'track.json'}"
                 f"  ({gateway.url}/api/v1/patients/{DEMO_PATIENT_ID}/healing)",
                 f"The analyses' log (COLMAP and the workers): {config.jobs.log_file or 'the output above'}",
+                f"The clinical report of the day-0 visit (all four visits, decision support): {report}"
+                f"  ({gateway.url}/api/v1/encounters/{DEMO_ENCOUNTER_ID}/report.pdf)",
                 "Decision support only: a clinician confirms every figure. Surface relief is geometry, not burn depth.",
             ]
         )

@@ -18,6 +18,7 @@ from gateway.controllers.assets import AssetController
 from gateway.controllers.decision_support import DecisionSupportController
 from gateway.controllers.parts import PART_CONTROLLERS
 from gateway.controllers.records import EncounterController, PatientController
+from gateway.controllers.reports import ReportController
 from gateway.controllers.sync import SyncController
 from gateway.controllers.transfers import TransferController
 from gateway.controllers.uploads import UploadController
@@ -43,6 +44,7 @@ def create_app(config: Config, *, start_workers: bool = False) -> Litestar:
             EncounterController,
             *PART_CONTROLLERS,
             DecisionSupportController,
+            ReportController,
             SyncController,
             UploadController,
             AssetController,

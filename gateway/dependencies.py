@@ -20,6 +20,7 @@ from gateway.services.decision_support import DecisionSupportService
 from gateway.services.frames import FrameService
 from gateway.services.phone_sync import PhoneSync
 from gateway.services.records import RecordService
+from gateway.services.reports import ReportService
 from gateway.services.transfers import TransferService
 from gateway.services.uploads import UploadService
 from gateway.storage.database import Database
@@ -40,6 +41,7 @@ class Services:
     frames: FrameService
     analyses: AnalysisService
     transfers: TransferService
+    reports: ReportService
     run_sync_now: Callable[[], None] = lambda: None
     """Starts a sync round at once (set by the scheduler when [sync] enabled)."""
 
@@ -49,6 +51,7 @@ class Services:
     @classmethod
     def build(cls, config: Config, db: Database) -> Services:
         records = RecordService(db, config)
+        reports = ReportService(db, config)
         store = MediaStore(media_root(config))
         assets = AssetService(db, config, store)
         return cls(
@@ -62,7 +65,8 @@ class Services:
             uploads=UploadService(db, config, store, assets),
             frames=FrameService(db, config, assets),
             analyses=AnalysisService(db, config, assets),
-            transfers=TransferService(db, config),
+            transfers=TransferService(db, config, reports),
+            reports=reports,
         )
 
 

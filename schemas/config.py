@@ -474,6 +474,16 @@ class CentralConfig(Message):
     """First part of every Zenoh key expression; must match the clinics'."""
 
 
+class ReportConfig(Message):
+    """The clinical report (PDF) of an encounter."""
+
+    clinic_name: str = ""
+    """The clinic's name as the report's header prints it; empty: the encounter's recorded facility."""
+    reports_dir: str = ""
+    """Folder of the reports made, one file per set of record versions; empty means "burnedge-reports" beside the
+    database."""
+
+
 class Config(Message):
     gateway: GatewayConfig = msgspec.field(default_factory=GatewayConfig)
     """The HTTP gateway and its database."""
@@ -503,6 +513,8 @@ class Config(Message):
     """The burn center's server."""
     backup: BackupConfig = msgspec.field(default_factory=BackupConfig)
     """Encrypted backups of the whole gateway state."""
+    report: ReportConfig = msgspec.field(default_factory=ReportConfig)
+    """The clinical report (PDF) of an encounter."""
 
 
 def load_config(path: str | Path | None = None, environ: dict[str, str] | None = None) -> Config:

@@ -39,8 +39,9 @@ class Snapshot:
     parts: list[PartData]
 
 
-def snapshot(conn: sqlite3.Connection, config: Config, encounter_id: str) -> Snapshot:
-    """The encounter's record and every part to send (record, patient, analyses with their files, photos)."""
+def snapshot(conn: sqlite3.Connection, config: Config, encounter_id: str, extra: tuple[PartData, ...] = ()) -> Snapshot:
+    """The encounter's record and every part to send (record, patient, analyses with their files, photos), and
+    `extra` (the clinical report, report.pdf)."""
     encounter = store.get_head(conn, RecordKind.encounter, encounter_id)
     record = EncounterRecord(encounter=encounter, parts=store.heads_of_children(conn, encounter_id, ENCOUNTER_PARTS))
     patient = store.get_head(conn, RecordKind.patient, encounter.data["patient_id"])
@@ -56,6 +57,7 @@ def snapshot(conn: sqlite3.Connection, config: Config, encounter_id: str) -> Sna
         for name in folders.matching_files(folder, ANALYSIS_FILES):
             parts.append(PartData(f"analyses/{job_id}/{name}", (folder / name).read_bytes()))
     parts += _pictures(conn, MediaStore(media_root(config)), encounter_id, config.sync.pictures)
+    parts += extra
     return Snapshot(record=record, analyses=analyses, parts=parts)
 
 

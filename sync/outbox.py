@@ -40,13 +40,19 @@ class Outbox:
         self.config = config
         self.root = outbox_root(config)
 
-    def queue(self, keys: SiteKeys, encounter_id: str, user: str) -> OutboxEntry:
-        """Seal the encounter as it stands now and queue it; a repeat with nothing changed returns the last one."""
+    def queue(
+        self, keys: SiteKeys, encounter_id: str, user: str, extra: tuple[bundle.PartData, ...] = ()
+    ) -> OutboxEntry:
+        """Seal the encounter as it stands now and queue it; a repeat with nothing changed returns the last one.
+        `extra`: parts made outside the snapshot that travel with it (the clinical report)."""
         with _queue_lock:  # one bundle version at a time per gateway: versions are counted, not raced
             with self.db.read() as conn:
                 center = peers.only_center(conn, self.config.sync.center_id)
-                snap = case_snapshot.snapshot(conn, self.config, encounter_id)
-                digest = _content_digest(snap.parts)
+                snap = case_snapshot.snapshot(conn, self.config, encounter_id, extra)
+                # Derived parts (the report) change with the clock and the center's own notes: only the record
+                # and its files decide whether the case changed.
+                derived = {part.name for part in extra}
+                digest = _content_digest([part for part in snap.parts if part.name not in derived])
                 last = store.latest(conn, center.site_id, encounter_id)
             if last is not None and last.content_digest == digest:
                 return msgspec.structs.replace(last.entry, unchanged=True)

@@ -20,6 +20,7 @@ from schemas.errors import BurnedgeError
 from schemas.transfer import OutboxEntry, SyncStatus
 from sync import peers
 from sync.anchor import anchor_path, load_anchor
+from sync.bundle import PartData
 from sync.keys import SiteKeys, load_keys
 from sync.outbox import Outbox
 from sync.sender import RoundReport, Sender
@@ -40,8 +41,8 @@ class SyncService:
     def keys(self) -> SiteKeys:
         return load_keys(keys_dir(self.config))
 
-    def queue(self, encounter_id: str, user: str) -> OutboxEntry:
-        return self.outbox.queue(self.keys(), encounter_id, user)
+    def queue(self, encounter_id: str, user: str, extra: tuple[PartData, ...] = ()) -> OutboxEntry:
+        return self.outbox.queue(self.keys(), encounter_id, user, extra)
 
     def run_round(self, *, force: bool = False) -> RoundReport | None:
         """One round unless the backoff says wait (`force` ignores it); None when skipped or already running."""

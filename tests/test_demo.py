@@ -9,6 +9,8 @@ import sys
 import pytest
 
 from harness.processes import FAST_HASH_ENV, REPO, free_port
+from harness.report_pages import inked_share, page_texts, rasterise
+from processing.report.figures import figure
 
 
 def test_the_demo_uploads_analyses_and_aligns_four_visits_then_exits(tmp_path):
@@ -52,6 +54,25 @@ def test_the_demo_uploads_analyses_and_aligns_four_visits_then_exits(tmp_path):
         true_change = 100 * (true["area_ratio_vs_day0"] - 1)
         assert session["area_change_percent"] == pytest.approx(true_change, abs=3.0), session
     assert track["healing_rate_cm2_per_day"] > 0
+    _check_report(out, track, tmp_path)
     again = subprocess.run(args, capture_output=True, text=True, cwd=REPO, env=env, timeout=300)
     assert again.returncode == 0, again.stderr[-4000:]  # a second run reuses the series, visits and analyses
     assert "Healing trend:" in again.stdout
+
+
+def _check_report(out: str, track: dict, tmp_path) -> None:
+    """The report the demo wrote: every page inked, every visit's figures as stored, to the report's rounding."""
+    line = next(line for line in out.splitlines() if line.startswith("The clinical report"))
+    pdf = open(line.split(": ", 1)[1].split()[0], "rb").read()
+    texts = page_texts(pdf)
+    text = " ".join(" ".join(texts).split())
+    pages = rasterise(pdf, tmp_path / "report-pages")
+    if pages:
+        assert len(pages) == len(texts) and all(inked_share(p) > 0.01 for p in pages)
+    assert f"of {len(texts)}" in text and "Decision support only — confirmed by a clinician" in text
+    for session in track["sessions"]:
+        for kind in ("area_cm2", "relief_max_mm", "volume_cm3"):
+            assert figure(session[kind], kind) in text, (kind, session[kind])
+    assert figure(track["healing_rate_cm2_per_day"], "healing_rate_cm2_per_day", "cm²/day") in text
+    assert f"day {figure(track['projected_closure_day'], 'closure_day', '')}" in text
+    assert "Surface relief is geometry" in text and "PROVISIONAL" in text and "Tetanus" in text

@@ -8,6 +8,7 @@ from pathlib import Path
 import pytest
 
 from harness.processes import free_port
+from harness.report_pages import page_texts
 from harness.sites import Sites, noise_photo, record_case, wait_for
 
 pytestmark = pytest.mark.server
@@ -43,6 +44,10 @@ def test_case_arrives_intact_and_advice_comes_back(sites: Sites, tmp_path: Path)
     assert received == sorted(p.read_bytes() for p in photos)  # byte-identical after decryption
     record = center.http.get(f"/api/v1/cases/{cases[0]['site_id']}/{entry['bundle_id']}/parts/record.json").json()
     assert record["encounter"]["meta"]["id"] == encounter_id
+    # The consultant reads the same clinical report the clinic prints.
+    report = center.http.get(f"/api/v1/cases/{cases[0]['site_id']}/{entry['bundle_id']}/parts/report.pdf")
+    assert report.headers["content-type"] == "application/pdf" and report.content.startswith(b"%PDF")
+    assert encounter_id in " ".join(page_texts(report.content))
 
     note = center.post(
         f"/api/v1/cases/{cases[0]['site_id']}/{entry['bundle_id']}/notes",

@@ -12,7 +12,7 @@ from base.storage import records as store
 from gateway.services import decision_support
 from processing.clinical.assessment import assess
 from schemas.base import iso, utcnow
-from schemas.clinical_results import InputRef
+from schemas.clinical_results import Assessment, InputRef
 from schemas.config import Config
 from schemas.records import COMPUTED_PARTS, ENCOUNTER_PARTS, RECORD_TYPES, Record, RecordKind
 
@@ -23,6 +23,24 @@ def _struct(record: Record):
     return msgspec.convert(record.data, RECORD_TYPES[record.meta.kind])
 
 
+def compute(conn: sqlite3.Connection, encounter_id: str, config: Config, now) -> Assessment:
+    """The encounter's Assessment as of `now`, from the current versions of its record (nothing stored)."""
+    encounter = store.get_head(conn, RecordKind.encounter, encounter_id)
+    patient = store.get_head(conn, RecordKind.patient, encounter.data["patient_id"])
+    parts = {k: r for k, r in store.heads_of_children(conn, encounter_id, _INPUT_PARTS).items() if not r.meta.deleted}
+    used = [patient, encounter, *parts.values()]
+    return assess(
+        patient=_struct(patient),
+        encounter=_struct(encounter),
+        parts={kind: _struct(r) for kind, r in parts.items()},
+        inputs=[InputRef(kind=r.meta.kind.value, id=r.meta.id, version=r.meta.version) for r in used],
+        as_of=now,
+        config=config.clinical,
+        computed_at=now,
+        clock_skew_s=config.gateway.clock_skew_s,
+    )
+
+
 def refresh_assessments(
     conn: sqlite3.Connection, principal: Principal, encounter_ids: list[str], config: Config
 ) -> None:
@@ -31,22 +49,7 @@ def refresh_assessments(
         encounter = store.find_head(conn, RecordKind.encounter, encounter_id)
         if encounter is None or encounter.meta.deleted:
             continue
-        patient = store.get_head(conn, RecordKind.patient, encounter.data["patient_id"])
-        parts = {
-            k: r for k, r in store.heads_of_children(conn, encounter_id, _INPUT_PARTS).items() if not r.meta.deleted
-        }
-        used = [patient, encounter, *parts.values()]
-        now = utcnow()
-        result = assess(
-            patient=_struct(patient),
-            encounter=_struct(encounter),
-            parts={kind: _struct(r) for kind, r in parts.items()},
-            inputs=[InputRef(kind=r.meta.kind.value, id=r.meta.id, version=r.meta.version) for r in used],
-            as_of=now,
-            config=config.clinical,
-            computed_at=now,
-            clock_skew_s=config.gateway.clock_skew_s,
-        )
+        result = compute(conn, encounter_id, config, utcnow())
         current = store.find_head(conn, RecordKind.assessment, encounter_id)
         version = current.meta.version + 1 if current else 1
         data_json = msgspec.json.encode(result)

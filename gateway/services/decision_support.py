@@ -39,7 +39,7 @@ _PARTS = {
 }
 
 
-def _versioned(record: Record) -> Versioned:
+def versioned(record: Record) -> Versioned:
     value = msgspec.convert(record.data, RECORD_TYPES[record.meta.kind])
     return Versioned(value, InputRef(kind=record.meta.kind.value, id=record.meta.id, version=record.meta.version))
 
@@ -63,17 +63,17 @@ def gather(conn: sqlite3.Connection, config: Config, encounter_id: str, as_of: d
     encounter = store.get_head(conn, RecordKind.encounter, encounter_id)
     patient = store.get_head(conn, RecordKind.patient, encounter.data["patient_id"])
     heads = store.heads_of_children(conn, encounter_id, _PARTS)
-    parts = {_PARTS[kind]: _versioned(r) for kind, r in heads.items() if not r.meta.deleted}
+    parts = {_PARTS[kind]: versioned(r) for kind, r in heads.items() if not r.meta.deleted}
     assessment = parts.get("assessment")
     analyses = [
-        _versioned(r)
+        versioned(r)
         for r in store.list_heads(conn, RecordKind.burn_analysis, parent_id=encounter_id, limit=None)
         if not r.meta.deleted
     ]
     track, track_refs = _track(conn, config, patient.meta.id)
     return DecisionInputs(
-        patient=_versioned(patient),
-        encounter=_versioned(encounter),
+        patient=versioned(patient),
+        encounter=versioned(encounter),
         as_of=as_of,
         age_years=assessment.value.age_years if assessment else None,
         analyses=analyses,

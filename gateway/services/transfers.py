@@ -4,12 +4,14 @@ from __future__ import annotations
 
 from base.accounts.permissions import Principal, require_read
 from base.storage import records as store
+from gateway.services.reports import ReportService
 from gateway.storage.database import Database
 from schemas.accounts import Role
 from schemas.config import Config
 from schemas.errors import Forbidden
 from schemas.records import Record, RecordKind
 from schemas.transfer import OutboxEntry, SyncStatus
+from sync.bundle import PartData
 from sync.service import SyncService
 
 SENDERS = frozenset({Role.clinician})
@@ -17,16 +19,20 @@ SENDERS = frozenset({Role.clinician})
 
 
 class TransferService:
-    def __init__(self, db: Database, config: Config):
+    def __init__(self, db: Database, config: Config, reports: ReportService):
         self.db = db
         self.sync = SyncService(db, config)
+        self.reports = reports
 
     def send(self, who: Principal, encounter_id: str) -> OutboxEntry:
         if who.role not in SENDERS:
             raise Forbidden("only a clinician may send a case to the burn center")
         require_read(who, RecordKind.encounter)
         store.get_head(self.db.connection(), RecordKind.encounter, encounter_id)  # NotFound before anything about keys
-        return self.sync.queue(encounter_id, who.username)
+        self.sync.keys()  # a clinic not linked to a center says so before a report is made
+        # The consultant reads the same report the clinic prints.
+        report = self.reports.make(who, encounter_id)
+        return self.sync.queue(encounter_id, who.username, (PartData("report.pdf", report.pdf),))
 
     def transfers(self, who: Principal, encounter_id: str) -> list[OutboxEntry]:
         require_read(who, RecordKind.encounter)

@@ -1,0 +1,54 @@
+"""The report command of the CLI: an encounter's clinical report (PDF) written to a file."""
+
+from __future__ import annotations
+
+import argparse
+import getpass
+import json
+from collections.abc import Callable
+from pathlib import Path
+
+from burnedge.cli_help import examples
+from schemas.config import Config
+from schemas.errors import InvalidInput, NotFound
+
+
+def write_report(config: Config, encounter_id: str, out: Path, made_by: str) -> dict:
+    """Make (or reuse) the report and write it to `out`; what was done, as the command prints it."""
+    from base.storage.durable import replace_atomically
+    from gateway.dependencies import Services
+    from gateway.storage.database import Database
+
+    if not Path(config.gateway.database).exists():
+        raise NotFound(f"no database at {config.gateway.database}")
+    if out.is_dir():
+        raise InvalidInput(f"{out} is a folder: give the file to write, e.g. {out / 'report.pdf'}")
+    if not out.parent.is_dir():
+        raise InvalidInput(f"the folder {out.parent} does not exist")
+    db = Database.from_config(config.gateway)
+    try:
+        made = Services.build(config, db).reports.make(None, encounter_id, made_by=made_by)
+    finally:
+        db.close()
+    replace_atomically(out, made.pdf)
+    return {"encounter_id": encounter_id, "out": str(out), "bytes": len(made.pdf), "made": made.made}
+
+
+def cmd_report(args: argparse.Namespace, config: Config) -> int:
+    by = f"{getpass.getuser()} (burnedge report on the gateway)"
+    print(json.dumps(write_report(config, args.encounter_id, Path(args.out), by)))
+    return 0
+
+
+def add_commands(sub, load: Callable[[argparse.Namespace], Config]) -> None:
+    report = sub.add_parser(
+        "report",
+        help="write an encounter's clinical report (PDF)",
+        **examples(
+            "burnedge report 0192f3b4-6a8f-7000-8000-00000000f000 --out report.pdf",
+            "burnedge --db burnedge-demo.sqlite3 report 0192f3b4-6a8f-7000-8000-00000000f000 --out day0.pdf",
+        ),
+    )
+    report.add_argument("encounter_id", help="the encounter's id")
+    report.add_argument("--out", required=True, help="the PDF file to write")
+    report.set_defaults(func=lambda args: cmd_report(args, load(args)))

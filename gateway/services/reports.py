@@ -1,0 +1,139 @@
+"""The clinical report of an encounter: made from one snapshot of its record, cached by the versions it read.
+
+A report is made again whenever a record version it reads changes (and, while a fluid plan is running, every
+minute: the rate to run now moves with the clock). Each report made enters the audit chain with its id, the
+SHA-256 of its bytes and of the record versions; a cached one is served as it was made.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import hashlib
+import sqlite3
+from dataclasses import dataclass
+from pathlib import Path
+
+from base import __version__
+from base.accounts.permissions import Principal, require_read
+from base.folders import analysis_dir, reports_root
+from base.storage import audit
+from base.storage import records as store
+from base.storage.durable import fsync_dir, replace_atomically
+from gateway.services import assessments, decision_support
+from processing.report.document import render
+from processing.report.inputs import REPORT_FORMAT, AnalysisPage, ReportInputs, versions_digest
+from schemas.audit import AuditHead
+from schemas.base import utcnow
+from schemas.clinical_results import FluidPhase, FluidPlan
+from schemas.config import Config
+from schemas.errors import Conflict
+from schemas.ids import uuid7
+from schemas.jobs import BurnAnalysis
+from schemas.records import RecordKind
+
+REPORT_KINDS = (RecordKind.encounter, RecordKind.patient, RecordKind.burn_analysis, RecordKind.consultation)
+
+
+@dataclass(frozen=True)
+class MadeReport:
+    pdf: bytes
+    etag: str
+    """The cache key: the record versions (and the clock minute while fluids run)."""
+    path: Path
+    made: bool
+    """False when the stored report of the same versions was served."""
+
+
+def _visits(conn: sqlite3.Connection, config: Config, patient_id: str, encounter_id: str) -> list[AnalysisPage]:
+    """Each of the patient's encounters' latest finished analysis, in the order the photos were taken."""
+    pages = []
+    for encounter in store.list_heads(conn, RecordKind.encounter, parent_id=patient_id, limit=None):
+        if encounter.meta.deleted:
+            continue
+        heads = store.list_heads(conn, RecordKind.burn_analysis, parent_id=encounter.meta.id, limit=None)
+        if not heads:
+            continue
+        latest = max(heads, key=lambda r: r.data["completed_at"])
+        analysis = decision_support.versioned(latest)
+        value: BurnAnalysis = analysis.value
+        taken = value.captured.at if value.captured else encounter.data["time_of_arrival"]
+        day = value.result.hours_since_injury / 24 if value.result.hours_since_injury is not None else None
+        here = "this encounter" if encounter.meta.id == encounter_id else "visit"
+        label = f"{here}, photos {taken[:16].replace('T', ' ')}" + (f", day {day:.0f} after injury" if day else "")
+        pages.append(AnalysisPage(analysis, analysis_dir(config, value.job_id), label, day))
+    return sorted(pages, key=lambda p: (p.day is None, p.day or 0.0, p.visit))
+
+
+def _fluids_now(conn: sqlite3.Connection, config: Config, encounter_id: str, now: dt.datetime) -> FluidPlan | None:
+    return assessments.compute(conn, encounter_id, config, now).fluids
+
+
+class ReportService:
+    def __init__(self, db, config: Config):
+        self.db = db
+        self.config = config
+
+    def make(self, principal: Principal | None, encounter_id: str, made_by: str = "") -> MadeReport:
+        """The report as of now (principal None: the gateway itself, e.g. for a case bundle)."""
+        if principal is not None:
+            for kind in REPORT_KINDS:
+                require_read(principal, kind)
+        with self.db.write() as conn:
+            encounter = store.get_head(conn, RecordKind.encounter, encounter_id)
+            if encounter.meta.deleted:
+                raise Conflict("this encounter was withdrawn: no report is made of it", current=encounter)
+            decision_support.refresh(conn, None, encounter_id, self.config)
+        now = utcnow()
+        with self.db.read() as conn:
+            inputs = self._inputs(conn, encounter_id, now, made_by or (principal.username if principal else "gateway"))
+        running = inputs.fluids_now is not None and inputs.fluids_now.phase is not FluidPhase.complete
+        versions = versions_digest(inputs.refs())
+        key = hashlib.sha256(f"{versions} {now:%Y-%m-%dT%H:%M}".encode()).hexdigest() if running else versions
+        folder = reports_root(self.config) / encounter_id
+        path = folder / f"{key}.pdf"
+        if path.is_file():
+            return MadeReport(path.read_bytes(), f'"{key}"', path, made=False)
+        pdf = render(inputs)
+        folder.mkdir(parents=True, exist_ok=True)
+        replace_atomically(path, pdf)
+        fsync_dir(folder)
+        with self.db.write() as conn:
+            audit.append(
+                conn,
+                action="report.make",
+                user_id=principal.user_id if principal else None,
+                device_id=principal.device_id if principal else None,
+                kind=RecordKind.encounter.value,
+                record_id=encounter_id,
+                detail=f"report {inputs.report_id} ({REPORT_FORMAT}): pdf sha256 {hashlib.sha256(pdf).hexdigest()}, "
+                f"record versions sha256 {versions}",
+            )
+        return MadeReport(pdf, f'"{key}"', path, made=True)
+
+    def _inputs(self, conn: sqlite3.Connection, encounter_id: str, now: dt.datetime, made_by: str) -> ReportInputs:
+        gathered = decision_support.gather(conn, self.config, encounter_id, now)
+        head = store.find_head(conn, RecordKind.decision_support, encounter_id)
+        consultations = store.list_heads(conn, RecordKind.consultation, parent_id=encounter_id, limit=None)
+        chain = audit.head(conn)
+        return ReportInputs(
+            report_id=uuid7(),
+            made_at=now,
+            made_by=made_by,
+            software_version=__version__,
+            clinic=self.config.report.clinic_name,
+            patient=gathered.patient,
+            encounter=gathered.encounter,
+            intake=gathered.intake,
+            primary=gathered.primary,
+            secondary=gathered.secondary,
+            mechanism=gathered.mechanism,
+            chart=gathered.chart,
+            resuscitation=gathered.resuscitation,
+            assessment=gathered.assessment,
+            fluids_now=_fluids_now(conn, self.config, encounter_id, now) if gathered.assessment else None,
+            decision_support=decision_support.versioned(head) if head else None,
+            analyses=_visits(conn, self.config, gathered.patient.value.id, encounter_id),
+            track=gathered.track,
+            consultations=[decision_support.versioned(c) for c in consultations if not c.meta.deleted],
+            audit_head=AuditHead(seq=chain.seq, hash=chain.hash) if chain else None,
+        )

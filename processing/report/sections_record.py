@@ -1,0 +1,263 @@
+"""The record's sections: who and when, the surveys, the mechanism, the burn chart, fluids and referral."""
+
+from __future__ import annotations
+
+from processing.report.body_diagram import draw_body_chart
+from processing.report.figures import clock, figure
+from processing.report.inputs import ReportInputs
+from processing.report.layout import GREY, NOT_RECORDED, URGENT, ReportPDF
+from schemas.burn_chart import BurnDepth
+from schemas.clinical_results import FluidPhase
+
+DEPTH_ORDER = list(BurnDepth)
+DEPTH_LABEL = {
+    BurnDepth.superficial: "superficial (epidermal)",
+    BurnDepth.superficial_partial: "superficial partial thickness",
+    BurnDepth.deep_partial: "deep partial thickness",
+    BurnDepth.full_thickness: "full thickness",
+}
+
+
+def _words(value) -> str:
+    return str(getattr(value, "value", value)).replace("_", " ")
+
+
+def header(pdf: ReportPDF, r: ReportInputs, missing: list[str]) -> None:
+    p, e = r.patient.value, r.encounter.value
+    pdf.doc_title("Burn assessment report")
+    pdf.para("Decision support only — every figure and recommendation is confirmed by a clinician.", bold=True)
+    name = " ".join(x for x in (p.given_name, p.family_name) if x) or NOT_RECORDED
+    age = r.assessment.value.age_years if r.assessment else None
+    born = (
+        p.date_of_birth.isoformat()
+        if p.date_of_birth
+        else f"estimated age {p.age_estimate_years:g} y"
+        if (p.age_estimate_years is not None)
+        else NOT_RECORDED
+    )
+    weight = e.weight_kg or p.weight_kg
+    source = (
+        "this encounter" if e.weight_kg else (_words(p.weight_source) if p.weight_source else "source not recorded")
+    )
+    rows = [
+        ("Clinic", r.clinic or e.facility or NOT_RECORDED),
+        ("Patient", f"{name} · MRN {p.medical_record_number or NOT_RECORDED} · id {p.id}"),
+        ("Born / age", f"{born}" + (f" · {age:g} y at injury" if age is not None else "")),
+        ("Sex", _words(p.sex)),
+        (
+            "Weight / height",
+            f"{f'{weight:g} kg ({source})' if weight else NOT_RECORDED} · "
+            f"{f'{p.height_cm:g} cm' if p.height_cm else 'height ' + NOT_RECORDED}",
+        ),
+        ("Encounter", f"{_words(e.mode)} · id {e.id}"),
+        ("Injury", clock(e.time_of_injury)),
+        ("Arrival", clock(e.time_of_arrival)),
+        ("Responsible clinician", e.clinician or NOT_RECORDED),
+        ("Report made", f"{clock(r.made_at)} by {r.made_by} · burnedge {r.software_version}"),
+    ]
+    if r.audit_head is not None:
+        rows.append(("Audit chain", f"entry {r.audit_head.seq}, hash {r.audit_head.hash[:16]}… before this report"))
+    pdf.facts(rows)
+    if missing:
+        pdf.subheading("Not in the record (figures that need it are not shown)")
+        pdf.bullets(missing, colour=GREY)
+
+
+def surveys(pdf: ReportPDF, r: ReportInputs) -> None:
+    pdf.heading("Primary survey (ABCDE)")
+    if r.primary is None:
+        pdf.para("No primary survey recorded.", colour=GREY)
+    else:
+        s = r.primary.value
+        a, b, c, d, x = s.airway, s.breathing, s.circulation, s.disability, s.exposure
+        signs = [
+            n.replace("_", " ")
+            for n in (
+                "facial_burns",
+                "singed_nasal_hair",
+                "carbonaceous_sputum",
+                "soot_in_mouth_or_nose",
+                "hoarse_voice",
+                "stridor",
+                "oropharyngeal_oedema",
+            )
+            if getattr(a, n)
+        ]
+        gcs = [a for a in (d.gcs_eye, d.gcs_verbal, d.gcs_motor)]
+        pdf.facts(
+            [
+                ("Assessed", clock(s.assessed_at)),
+                (
+                    "A — airway",
+                    f"patent: {_yn(a.patent)}; intervention: {_words(a.intervention)}; "
+                    f"signs: {', '.join(signs) or 'none recorded'}",
+                ),
+                (
+                    "B — breathing",
+                    f"RR {_n(b.respiratory_rate_per_min, '/min')}; SpO₂ {_n(b.spo2_percent, ' %')}; "
+                    f"O₂ {_n(b.oxygen_l_per_min, ' L/min')}; COHb {_n(b.carboxyhaemoglobin_percent, ' %')}"
+                    + ("; circumferential chest burn" if b.circumferential_chest_burn else ""),
+                ),
+                (
+                    "C — circulation",
+                    f"HR {_n(c.heart_rate_per_min, '/min')}; BP {_n(c.systolic_bp_mmhg)}/"
+                    f"{_n(c.diastolic_bp_mmhg)} mmHg; CRT {_n(c.capillary_refill_s, ' s')}; IV access: {_yn(c.iv_access)}"
+                    + ("; circumferential limb burn" if c.circumferential_limb_burn else ""),
+                ),
+                (
+                    "D — disability",
+                    (
+                        f"GCS {sum(gcs)} (E{d.gcs_eye} V{d.gcs_verbal} M{d.gcs_motor})"
+                        if None not in gcs
+                        else "GCS not fully recorded"
+                    )
+                    + f"; AVPU {_words(d.avpu) if d.avpu else '—'}"
+                    + f"; glucose {_n(d.blood_glucose_mmol_l, ' mmol/L')}",
+                ),
+                (
+                    "E — exposure",
+                    f"temperature {_n(x.temperature_c, ' °C')}; cooled: {_yn(x.burn_cooled)}"
+                    f"{f' for {x.cooling_minutes:g} min' if x.cooling_minutes else ''}; kept warm: {_yn(x.kept_warm)}",
+                ),
+            ]
+        )
+    pdf.heading("Secondary survey and mechanism")
+    if r.secondary is None:
+        pdf.para("No secondary survey recorded.", colour=GREY)
+    else:
+        s = r.secondary.value
+        lines = [f"{_words(f.area)}: {f.finding}" for f in s.findings]
+        lines += [f"other injury{' (major)' if o.major else ''}: {o.description}" for o in s.other_injuries]
+        pdf.bullets(lines or ["no findings recorded"])
+        if s.notes:
+            pdf.para(s.notes)
+    if r.mechanism is None:
+        pdf.para("Mechanism not recorded.", colour=GREY)
+    else:
+        m = r.mechanism.value
+        extra = [
+            f"agent: {m.agent}" if m.agent else "",
+            "enclosed space" if m.enclosed_space else "",
+            f"{m.duration_s:g} s exposure" if m.duration_s is not None else "",
+            f"{m.voltage_v:g} V" if m.voltage_v is not None else "",
+            "explosion" if m.explosion else "",
+        ]
+        pdf.para(f"Mechanism: {_words(m.type)}" + "".join(f"; {x}" for x in extra if x))
+        if m.description:
+            pdf.para(m.description)
+
+
+def burn_chart(pdf: ReportPDF, r: ReportInputs) -> None:
+    pdf.heading("Burn chart and %TBSA", new_page_if_below=110)
+    if r.chart is None:
+        pdf.para(
+            "No burn chart recorded: %TBSA, the fluid plan and the referral criteria cannot be computed.", colour=GREY
+        )
+        return
+    chart = r.chart.value
+    deepest: dict = {}
+    for entry in chart.entries:
+        known = deepest.get(entry.region)
+        if known is None or DEPTH_ORDER.index(entry.depth) > DEPTH_ORDER.index(known):
+            deepest[entry.region] = entry.depth
+    y = pdf.get_y()
+    draw_body_chart(pdf, pdf.l_margin, y, pdf.epw * 0.62, 92, deepest)
+    pdf.set_y(y + 94)
+    pdf.para(
+        f"Charted by the clinician at {clock(chart.assessed_at)}; depth is the clinician's category, not a "
+        "measurement. Where a region has several depths the drawing shows the deepest.",
+        colour=GREY,
+    )
+    tbsa = r.assessment.value.tbsa if r.assessment else None
+    if tbsa is not None:
+        pdf.facts(
+            [
+                (
+                    "%TBSA (Lund-Browder)",
+                    f"{figure(tbsa.tbsa_percent, 'lund_browder_percent', '%')} "
+                    f"(partial thickness {tbsa.partial_thickness_percent:.2f} %, full thickness "
+                    f"{tbsa.full_thickness_percent:.2f} %; superficial {tbsa.excluded_superficial_percent:.2f} % excluded)",
+                ),
+                ("Rule of Nines", f"{tbsa.rule_of_nines_percent:.2f} % ({tbsa.rule_of_nines_variant}), for comparison"),
+                ("Age column", f"{tbsa.age_adjustment} (age {tbsa.age_years:g} y, {_words(tbsa.age_source)})"),
+            ]
+        )
+        rows = [
+            [_words(c.region), DEPTH_LABEL[c.depth], f"{c.fraction:.0%}", f"{c.tbsa_percent:.2f} %"]
+            for c in tbsa.contributions
+        ]
+        pdf.table(["Region", "Depth", "Share burned", "%TBSA"], rows, [62, 58, 28, 30])
+    for area in chart.special_areas:
+        pdf.para(f"Special area: {_words(area.area)} ({DEPTH_LABEL[area.depth]})")
+
+
+def fluids(pdf: ReportPDF, r: ReportInputs) -> None:
+    pdf.heading("Fluids", new_page_if_below=50)
+    plan = r.fluids_now
+    if plan is None:
+        pdf.para("No fluid plan: it needs the weight, the burn chart, the age and the time of injury.", colour=GREY)
+        return
+    if not plan.formal_resuscitation_indicated:
+        pdf.para(
+            f"Burn of {plan.tbsa_percent:g} %TBSA, under the {plan.formal_resuscitation_threshold_percent:g} % "
+            "threshold: formal resuscitation is not usually required. Formula figures below are for reference.",
+            bold=True,
+            colour=URGENT,
+        )
+    urine = plan.urine_output_target
+    running = plan.phase is not FluidPhase.complete
+    rows = [
+        ("As of", f"{clock(plan.as_of)} ({plan.hours_since_injury:.1f} h since injury)"),
+        (
+            "Formula",
+            f"{plan.multiplier_basis} × {plan.weight_kg:g} kg ({plan.weight_source}) × {plan.tbsa_percent:g} %",
+        ),
+        (
+            "24-hour volume",
+            f"{figure(plan.total_24h_ml, 'volume_ml', 'mL')}: {figure(plan.first_8h_ml, 'volume_ml', 'mL')}"
+            f" in the first 8 h, {figure(plan.next_16h_ml, 'volume_ml', 'mL')} in the next 16 h",
+        ),
+        ("Given so far", figure(plan.fluid_given_ml, "volume_ml", "mL")),
+        (
+            "Rate now",
+            f"{figure(plan.rate_now_ml_per_h, 'rate_ml_per_h', 'mL/h')}" if running else "formula period over",
+        ),
+        (
+            "Still due in phase",
+            f"{figure(plan.remaining_in_phase_ml, 'volume_ml', 'mL')} over {plan.hours_left_in_phase:.1f} h"
+            f" ({_words(plan.phase)})"
+            if running
+            else "—",
+        ),
+        (
+            "Urine output target",
+            f"{urine.ml_per_kg_per_h_low:g}–{urine.ml_per_kg_per_h_high:g} mL/kg/h = "
+            f"{urine.ml_per_h_low:,.0f}–{urine.ml_per_h_high:,.0f} mL/h ({urine.basis})",
+        ),
+    ]
+    if plan.maintenance is not None:
+        rows.append(("Maintenance (child)", f"{plan.maintenance.ml_per_h:,.1f} mL/h ({plan.maintenance.rule})"))
+    pdf.facts(rows)
+    pdf.bullets(plan.warnings, colour=GREY)
+
+
+def referral(pdf: ReportPDF, r: ReportInputs) -> None:
+    pdf.heading("Referral to a burn center", new_page_if_below=40)
+    result = r.assessment.value.referral if r.assessment else None
+    if result is None:
+        pdf.para("Referral criteria not assessed (the burn chart and the age are needed).", colour=GREY)
+        return
+    current = result.current
+    pdf.para(f"{current.guideline}, version {current.version}: {current.recommendation}", bold=True)
+    pdf.bullets([f"{c.text} — {c.reason}" for c in current.criteria if c.met])
+    pdf.para(
+        f"For comparison, {result.older.guideline} {result.older.version}: {result.older.recommendation}", colour=GREY
+    )
+
+
+def _yn(value: bool | None) -> str:
+    return "—" if value is None else "yes" if value else "no"
+
+
+def _n(value, unit: str = "") -> str:
+    return "—" if value is None else f"{value:g}{unit}"
