@@ -399,7 +399,7 @@ def main(argv: list[str] | None = None) -> int:
         level=logging.DEBUG if args.verbose else logging.INFO, format="%(asctime)s %(levelname)s %(name)s: %(message)s"
     )
     if not args.verbose:  # every scheduler tick and every HTTP request of the demo's client would be logged
-        for chatty in ("apscheduler", "httpx"):
+        for chatty in ("apscheduler", "httpx", "fontTools"):
             logging.getLogger(chatty).setLevel(logging.WARNING)
     try:
         return args.func(args)

@@ -40,8 +40,8 @@ def test_three_doses_without_the_time_of_the_last_cannot_be_decided():
     assert cell.vaccine is None and cell.tig is False
 
 
-def _inputs(age_years: float | None = 34.0, pregnant: bool | None = None, **intake) -> DecisionInputs:
-    patient = Patient(id=uuid7(), pregnant=pregnant)
+def _inputs(age_years: float | None = 34.0, **intake) -> DecisionInputs:
+    patient = Patient(id=uuid7())
     encounter = Encounter(
         id=uuid7(),
         patient_id=patient.id,
@@ -66,7 +66,7 @@ def _one(inputs: DecisionInputs):
 
 def test_a_burn_with_three_doses_and_a_dose_six_years_ago_needs_a_booster_and_no_tig():
     r, missing = _one(_inputs(tetanus_doses=TetanusDoses.three_or_more, last_tetanus_dose=dt.date(2020, 11, 1)))
-    assert "give Tdap or Td" in r.text and "immune globulin is not indicated" in r.text
+    assert "give Tdap (or Td" in r.text and "immune globulin is not indicated" in r.text
     assert not r.urgent and missing == []
     assert {(i.name, i.value, i.version) for i in r.inputs} >= {
         ("prior tetanus doses", "three_or_more", 3),
@@ -82,17 +82,23 @@ def test_a_burn_with_three_doses_four_years_ago_needs_nothing():
 
 def test_no_intake_counts_as_unknown_doses_and_gives_vaccine_and_tig():
     r, missing = _one(_inputs())
-    assert "give Tdap or Td" in r.text and "Give tetanus immune globulin" in r.text and r.urgent
+    assert "give Tdap (or Td" in r.text and "Give tetanus immune globulin" in r.text and r.urgent
     assert r.details == [tetanus.TIG_DOSE]
     assert missing and "intake not recorded" in missing[0]
 
 
 @pytest.mark.parametrize(
-    ("age", "pregnant", "vaccine"),
-    [(3.0, None, "DTaP"), (8.0, None, "Tdap (7 to 10 years)"), (29.0, True, "Tdap (pregnancy)"), (None, None, "age")],
+    ("age", "doses", "vaccine"),
+    [
+        (3.0, TetanusDoses.fewer_than_three, "DTaP (under 7 years)"),
+        (8.0, TetanusDoses.fewer_than_three, "Tdap (or Td if Tdap was given before)"),
+        (8.0, TetanusDoses.three_or_more, "give Td or Tdap"),
+        (29.0, TetanusDoses.three_or_more, "Tdap (or Td if Tdap was given before)"),
+        (None, TetanusDoses.fewer_than_three, "age not recorded"),
+    ],
 )
-def test_the_vaccine_named_follows_age_and_pregnancy(age, pregnant, vaccine):
-    r, _ = _one(_inputs(age_years=age, pregnant=pregnant, tetanus_doses=TetanusDoses.fewer_than_three))
+def test_the_vaccine_named_follows_the_age(age, doses, vaccine):
+    r, _ = _one(_inputs(age_years=age, tetanus_doses=doses, years_since_last_tetanus_dose=6.0))
     assert vaccine in r.text
 
 

@@ -5,20 +5,11 @@ from __future__ import annotations
 from schemas.decision_support import Source
 
 ACIP_TETANUS = Source(
-    guideline=(
-        "CDC/ACIP: Prevention of Pertussis, Tetanus, and Diphtheria with Vaccines in the United States "
-        "(MMWR Recomm Rep 2018;67(2))"
-    ),
-    year=2018,
-    section="Guide to tetanus prophylaxis in routine wound management (table)",
-    url="https://www.cdc.gov/mmwr/volumes/67/rr/rr6702a1.htm",
-)
-ACIP_TETANUS_2020 = Source(
-    guideline="CDC/ACIP: Use of Tetanus Toxoid, Reduced Diphtheria Toxoid, and Acellular Pertussis Vaccines "
-    "(MMWR 2020;69(3):77-83), with the 2018 wound-management table",
-    year=2020,
-    section="Td or Tdap for tetanus prophylaxis in wound management",
-    url="https://www.cdc.gov/mmwr/volumes/69/wr/mm6903a5.htm",
+    guideline="CDC/ACIP: Guide to tetanus prophylaxis in routine wound management (as reproduced in the MSD Manual "
+    "Professional, 2023, and CDC's Summary Guide to Tetanus Prophylaxis in Routine Wound Management)",
+    year=2023,
+    section="Table: prior doses (unknown or < 3; >= 3) x wound (clean and minor; all other wounds, burns included)",
+    url="https://www.msdmanuals.com/professional/multimedia/table/tetanus-prophylaxis-in-routine-wound-management",
 )
 ABLS_FLUIDS = Source(
     guideline="American Burn Association: Advanced Burn Life Support (ABLS) Provider Manual",

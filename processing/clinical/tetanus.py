@@ -13,12 +13,15 @@ import enum
 from dataclasses import dataclass
 
 from processing.clinical.decision_inputs import DecisionInputs
-from processing.clinical.sources import ACIP_TETANUS, ACIP_TETANUS_2020
+from processing.clinical.sources import ACIP_TETANUS
 from schemas.decision_support import InputUsed, Recommendation, RecommendationCategory
 from schemas.record_parts import TetanusDoses, TetanusStatus
 
 DAYS_PER_YEAR = 365.25
-TIG_DOSE = "TIG 250 units intramuscularly, at a different site from the vaccine"
+TIG_DOSE = (
+    "Tetanus immune globulin intramuscularly; dose per the product's label (the sources differ: 250 units in CDC's "
+    "summary guide, 500 units for adults in the MSD Manual 2023)"
+)
 
 
 class Wound(enum.StrEnum):
@@ -53,16 +56,15 @@ def table_cell(doses: TetanusDoses, years_since_last: float | None, wound: Wound
     return TableCell(due, False, row, f"{row}, last dose {years_since_last:.1f} years ago ({limit:g} {side})")
 
 
-def _vaccine_for(age: float | None, pregnant: bool | None) -> str:
+def _vaccine_for(age: float | None, cell: TableCell) -> str:
     if age is None:
         return "a tetanus-toxoid-containing vaccine for the patient's age (age not recorded)"
     if age < 7:
         return "DTaP (under 7 years)"
-    if pregnant:
-        return "Tdap (pregnancy)"
-    if age < 11:
-        return "Tdap (7 to 10 years)"
-    return "Tdap or Td (Tdap preferred if Tdap has not been given before)"
+    if cell.row.startswith("unknown") or age >= 11:
+        # Not fully immunised from 7 years, or 11 and over without a Tdap dose before: one dose of Tdap.
+        return "Tdap (or Td if Tdap was given before)"
+    return "Td or Tdap"
 
 
 def _history(inputs: DecisionInputs) -> tuple[TableCell, list[InputUsed], list[str]]:
@@ -107,10 +109,7 @@ def recommend(inputs: DecisionInputs) -> tuple[list[Recommendation], list[str]]:
     cell, used, missing = _history(inputs)
     age = inputs.age_used()
     facts = [*used, *([age] if age else [])]
-    pregnant = inputs.patient.value.pregnant
-    if pregnant:
-        facts.append(inputs.patient.used("pregnant", True))
-    vaccine = _vaccine_for(inputs.age_years, pregnant)
+    vaccine = _vaccine_for(inputs.age_years, cell)
     immunodeficient = inputs.intake is not None and inputs.intake.value.severe_immunodeficiency
     tig = cell.tig or bool(immunodeficient)
     if immunodeficient:
@@ -121,9 +120,9 @@ def recommend(inputs: DecisionInputs) -> tuple[list[Recommendation], list[str]]:
             "Record the date of the last dose."
         )
     elif cell.vaccine:
-        text = f"Tetanus: give {vaccine}; a burn is a tetanus-prone wound ({cell.why})."
+        text = f"Tetanus: give {vaccine}; a burn counts among 'all other wounds' in the table ({cell.why})."
     else:
-        text = f"Tetanus: no vaccine needed now; a burn is a tetanus-prone wound ({cell.why})."
+        text = f"Tetanus: no vaccine needed now; a burn counts among 'all other wounds' in the table ({cell.why})."
     details = []
     if tig:
         why = "severe immunodeficiency, whatever the vaccine history" if not cell.tig else cell.row
@@ -131,7 +130,7 @@ def recommend(inputs: DecisionInputs) -> tuple[list[Recommendation], list[str]]:
         details.append(TIG_DOSE)
     elif cell.vaccine is not None:
         text += " Tetanus immune globulin is not indicated."
-    source = ACIP_TETANUS_2020 if "Td" in vaccine else ACIP_TETANUS
+    source = ACIP_TETANUS
     recommendation = Recommendation(
         key="tetanus",
         category=RecommendationCategory.tetanus,
