@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from processing.report import sections_advice, sections_analysis, sections_record
+from processing.report import sections_advice, sections_analysis, sections_header, sections_record
 from processing.report.inputs import ReportInputs, versions_digest
 from processing.report.layout import ReportPDF
 
@@ -33,7 +33,8 @@ def render(r: ReportInputs) -> bytes:
     pdf.set_creator(f"burnedge {r.software_version}")
     pdf.set_creation_date(r.made_at)
     pdf.add_page()
-    sections_record.header(pdf, r, missing_lines(r))
+    sections_header.header(pdf, r, missing_lines(r))
+    sections_header.at_a_glance(pdf, r)
     sections_record.surveys(pdf, r)
     pdf.add_page()
     sections_record.burn_chart(pdf, r)

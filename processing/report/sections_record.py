@@ -5,7 +5,7 @@ from __future__ import annotations
 from processing.report.body_diagram import draw_body_chart
 from processing.report.figures import clock, figure
 from processing.report.inputs import ReportInputs
-from processing.report.layout import GREY, NOT_RECORDED, URGENT, ReportPDF
+from processing.report.layout import GREY, URGENT, ReportPDF
 from schemas.burn_chart import BurnDepth
 from schemas.clinical_results import FluidPhase
 
@@ -18,49 +18,8 @@ DEPTH_LABEL = {
 }
 
 
-def _words(value) -> str:
+def words(value) -> str:
     return str(getattr(value, "value", value)).replace("_", " ")
-
-
-def header(pdf: ReportPDF, r: ReportInputs, missing: list[str]) -> None:
-    p, e = r.patient.value, r.encounter.value
-    pdf.doc_title("Burn assessment report")
-    pdf.para("Decision support only — every figure and recommendation is confirmed by a clinician.", bold=True)
-    name = " ".join(x for x in (p.given_name, p.family_name) if x) or NOT_RECORDED
-    age = r.assessment.value.age_years if r.assessment else None
-    born = (
-        p.date_of_birth.isoformat()
-        if p.date_of_birth
-        else f"estimated age {p.age_estimate_years:g} y"
-        if (p.age_estimate_years is not None)
-        else NOT_RECORDED
-    )
-    weight = e.weight_kg or p.weight_kg
-    source = (
-        "this encounter" if e.weight_kg else (_words(p.weight_source) if p.weight_source else "source not recorded")
-    )
-    rows = [
-        ("Clinic", r.clinic or e.facility or NOT_RECORDED),
-        ("Patient", f"{name} · MRN {p.medical_record_number or NOT_RECORDED} · id {p.id}"),
-        ("Born / age", f"{born}" + (f" · {age:g} y at injury" if age is not None else "")),
-        ("Sex", _words(p.sex)),
-        (
-            "Weight / height",
-            f"{f'{weight:g} kg ({source})' if weight else NOT_RECORDED} · "
-            f"{f'{p.height_cm:g} cm' if p.height_cm else 'height ' + NOT_RECORDED}",
-        ),
-        ("Encounter", f"{_words(e.mode)} · id {e.id}"),
-        ("Injury", clock(e.time_of_injury)),
-        ("Arrival", clock(e.time_of_arrival)),
-        ("Responsible clinician", e.clinician or NOT_RECORDED),
-        ("Report made", f"{clock(r.made_at)} by {r.made_by} · burnedge {r.software_version}"),
-    ]
-    if r.audit_head is not None:
-        rows.append(("Audit chain", f"entry {r.audit_head.seq}, hash {r.audit_head.hash[:16]}… before this report"))
-    pdf.facts(rows)
-    if missing:
-        pdf.subheading("Not in the record (figures that need it are not shown)")
-        pdf.bullets(missing, colour=GREY)
 
 
 def surveys(pdf: ReportPDF, r: ReportInputs) -> None:
@@ -89,7 +48,7 @@ def surveys(pdf: ReportPDF, r: ReportInputs) -> None:
                 ("Assessed", clock(s.assessed_at)),
                 (
                     "A — airway",
-                    f"patent: {_yn(a.patent)}; intervention: {_words(a.intervention)}; "
+                    f"patent: {_yn(a.patent)}; intervention: {words(a.intervention)}; "
                     f"signs: {', '.join(signs) or 'none recorded'}",
                 ),
                 (
@@ -111,7 +70,7 @@ def surveys(pdf: ReportPDF, r: ReportInputs) -> None:
                         if None not in gcs
                         else "GCS not fully recorded"
                     )
-                    + f"; AVPU {_words(d.avpu) if d.avpu else '—'}"
+                    + f"; AVPU {words(d.avpu) if d.avpu else '—'}"
                     + f"; glucose {_n(d.blood_glucose_mmol_l, ' mmol/L')}",
                 ),
                 (
@@ -126,7 +85,7 @@ def surveys(pdf: ReportPDF, r: ReportInputs) -> None:
         pdf.para("No secondary survey recorded.", colour=GREY)
     else:
         s = r.secondary.value
-        lines = [f"{_words(f.area)}: {f.finding}" for f in s.findings]
+        lines = [f"{words(f.area)}: {f.finding}" for f in s.findings]
         lines += [f"other injury{' (major)' if o.major else ''}: {o.description}" for o in s.other_injuries]
         pdf.bullets(lines or ["no findings recorded"])
         if s.notes:
@@ -142,7 +101,7 @@ def surveys(pdf: ReportPDF, r: ReportInputs) -> None:
             f"{m.voltage_v:g} V" if m.voltage_v is not None else "",
             "explosion" if m.explosion else "",
         ]
-        pdf.para(f"Mechanism: {_words(m.type)}" + "".join(f"; {x}" for x in extra if x))
+        pdf.para(f"Mechanism: {words(m.type)}" + "".join(f"; {x}" for x in extra if x))
         if m.description:
             pdf.para(m.description)
 
@@ -179,16 +138,16 @@ def burn_chart(pdf: ReportPDF, r: ReportInputs) -> None:
                     f"{tbsa.full_thickness_percent:.2f} %; superficial {tbsa.excluded_superficial_percent:.2f} % excluded)",
                 ),
                 ("Rule of Nines", f"{tbsa.rule_of_nines_percent:.2f} % ({tbsa.rule_of_nines_variant}), for comparison"),
-                ("Age column", f"{tbsa.age_adjustment} (age {tbsa.age_years:g} y, {_words(tbsa.age_source)})"),
+                ("Age column", f"{tbsa.age_adjustment} (age {tbsa.age_years:g} y, {words(tbsa.age_source)})"),
             ]
         )
         rows = [
-            [_words(c.region), DEPTH_LABEL[c.depth], f"{c.fraction:.0%}", f"{c.tbsa_percent:.2f} %"]
+            [words(c.region), DEPTH_LABEL[c.depth], f"{c.fraction:.0%}", f"{c.tbsa_percent:.2f} %"]
             for c in tbsa.contributions
         ]
         pdf.table(["Region", "Depth", "Share burned", "%TBSA"], rows, [62, 58, 28, 30])
     for area in chart.special_areas:
-        pdf.para(f"Special area: {_words(area.area)} ({DEPTH_LABEL[area.depth]})")
+        pdf.para(f"Special area: {words(area.area)} ({DEPTH_LABEL[area.depth]})")
 
 
 def fluids(pdf: ReportPDF, r: ReportInputs) -> None:
@@ -225,7 +184,7 @@ def fluids(pdf: ReportPDF, r: ReportInputs) -> None:
         (
             "Still due in phase",
             f"{figure(plan.remaining_in_phase_ml, 'volume_ml', 'mL')} over {plan.hours_left_in_phase:.1f} h"
-            f" ({_words(plan.phase)})"
+            f" ({words(plan.phase)})"
             if running
             else "—",
         ),
