@@ -48,10 +48,13 @@ class Source(Frozen):
 
     guideline: str
     """Title and publisher, e.g. "CDC/ACIP: Prevention of pertussis, tetanus, and diphtheria with vaccines"."""
-    year: int
     section: str
     """Section, table or recommendation number."""
+    year: int | None = None
+    """Year of the version read; None for an undated web page (see `accessed`)."""
     url: str = ""
+    accessed: str = ""
+    """When an undated web page was read (YYYY-MM-DD)."""
 
 
 class InputUsed(Frozen):

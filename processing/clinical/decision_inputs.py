@@ -74,10 +74,11 @@ class DecisionInputs:
         return None if hours is None else hours / HOURS_PER_DAY
 
     def age_used(self) -> InputUsed | None:
-        """The age fact, read from the assessment that computed it."""
-        if self.age_years is None or self.assessment is None:
+        """The age fact, read from the assessment that computed it (else the patient record it comes from)."""
+        if self.age_years is None:
             return None
-        return self.assessment.used("age at injury", f"{self.age_years:g} y")
+        source = self.assessment if self.assessment is not None else self.patient
+        return source.used("age at injury", f"{self.age_years:g} y")
 
     def weight_used(self) -> tuple[float | None, InputUsed | None]:
         """The weight the calculators use: this encounter's, else the patient's."""

@@ -13,12 +13,20 @@ import datetime as dt
 
 import msgspec
 
-from processing.clinical import fluid_advice, follow_up, tetanus
+from processing.clinical import fluid_advice, follow_up, infection, pain, tetanus, wound_care
 from processing.clinical.decision_inputs import DecisionInputs
 from schemas.decision_support import DecisionSupport, Recommendation, RecommendationAct, RecommendationState
 from schemas.errors import InvalidInput
 
-RULES = (tetanus.recommend, fluid_advice.recommend, follow_up.referral)
+RULES = (
+    wound_care.recommend,
+    tetanus.recommend,
+    pain.recommend,
+    fluid_advice.recommend,
+    infection.recommend,
+    follow_up.referral,
+    follow_up.timing,
+)
 MAX_REASON = 2000
 
 

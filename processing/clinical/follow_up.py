@@ -1,12 +1,14 @@
 """Follow-up: the referral advice restated with its urgency, and the healing track's review prompts.
 
-Depth re-assessment and the re-dressing schedule depend on the wound-care rules (wound_care.py).
+The depth re-assessment and the 2-week not-healed referral count from the time of injury.
 """
 
 from __future__ import annotations
 
+import datetime as dt
+
 from processing.clinical.decision_inputs import DecisionInputs
-from processing.clinical.sources import ABA_REFERRAL, DEITCH, KANTOR_MARGOLIS
+from processing.clinical.sources import ABA_REFERRAL, BBA_NOT_HEALED, DEITCH, KANTOR_MARGOLIS, VICBURNS_DEPTH
 from schemas.clinical_results import ReferralTier
 from schemas.decision_support import InputUsed, Recommendation, RecommendationCategory
 
@@ -41,6 +43,48 @@ def referral(inputs: DecisionInputs) -> tuple[list[Recommendation], list[str]]:
             urgent=immediate,
         )
     ], []
+
+
+REASSESS_H = 48.0
+DEPTH_UNCLEAR_DAYS = 5.0
+NOT_HEALED_DAYS = 14
+
+
+def timing(inputs: DecisionInputs) -> tuple[list[Recommendation], list[str]]:
+    """Depth re-assessment within 48 h (shown for the first 5 days), and the 2-week not-healed referral."""
+    injury, days = inputs.injury_time, inputs.days_since_injury()
+    if inputs.chart is None:
+        return [], []
+    if injury is None or days is None:
+        return [], ["time of injury: the follow-up dates are not worked out"]
+    used = [
+        inputs.encounter.used("time of injury", injury),
+        inputs.chart.used("burn chart assessed", inputs.chart.value.assessed_at),
+    ]
+    out = []
+    if days < DEPTH_UNCLEAR_DAYS:
+        by = (injury + dt.timedelta(hours=REASSESS_H)).strftime("%Y-%m-%d %H:%M UTC")
+        out.append(
+            Recommendation(
+                key="follow_up.depth_reassessment",
+                category=RecommendationCategory.follow_up,
+                text=f"Re-assess the burn depth, ideally within 48 hours of the injury (by {by}): depth evolves as "
+                "exudate and oedema settle. Refer if the depth is still unclear after 3-5 days.",
+                inputs=used,
+                source=VICBURNS_DEPTH,
+            )
+        )
+    by = (injury + dt.timedelta(days=NOT_HEALED_DAYS)).strftime("%Y-%m-%d")
+    out.append(
+        Recommendation(
+            key="follow_up.not_healed_2_weeks",
+            category=RecommendationCategory.follow_up,
+            text=f"Refer to a burn service if the burn is not healed in 2 weeks (by {by}).",
+            inputs=used,
+            source=BBA_NOT_HEALED,
+        )
+    )
+    return out, []
 
 
 def healing_prompts(inputs: DecisionInputs) -> list[Recommendation]:
