@@ -35,7 +35,10 @@ def decision_support(pdf: ReportPDF, r: ReportInputs) -> None:
             if rec.reason:
                 state += f": “{rec.reason}”"
         pdf.para(f"State: {state}", bold=rec.state is RecommendationState.pending, size=8)
-        source = f"{rec.source.guideline}, {rec.source.section}" + (f" <{rec.source.url}>" if rec.source.url else "")
+        when = f" ({rec.source.year})" if rec.source.year else f" (web page read {rec.source.accessed})"
+        source = f"{rec.source.guideline}{when}, {rec.source.section}" + (
+            f" <{rec.source.url}>" if rec.source.url else ""
+        )
         pdf.para(f"Source: {source}", size=7, colour=GREY)
         used = "; ".join(f"{i.name} = {i.value} ({i.kind} v{i.version})" for i in rec.inputs)
         if used:
