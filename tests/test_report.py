@@ -74,3 +74,37 @@ def test_who_may_read_the_report(client, auth, eid):
     assert _report(client, auth["admin"], eid).status_code == 403
     assert _report(client, auth["clinician"], "0192f3b4-6a8e-7c3d-9b1a-000000000000").status_code == 404
     assert client.get(f"/api/v1/encounters/{eid}/report.pdf").status_code == 401
+
+
+def test_the_fluid_rate_printed_is_the_plan_at_the_moment_the_report_is_made(client, clin):
+    import datetime as dt
+    import re
+
+    from processing.clinical.fluids import FIRST_PHASE_H
+
+    patient = patient_body(weight_kg=70.0)
+    client.post("/api/v1/patients", json=patient, headers=clin)
+    encounter = encounter_body(patient["id"], injury_hours_ago=2)
+    client.post("/api/v1/encounters", json=encounter, headers=clin)
+    eid = encounter["id"]
+    chart = {
+        "encounter_id": eid,
+        "assessed_at": encounter["time_of_arrival"],
+        "entries": [{"region": "trunk_anterior", "fraction": 1.0, "depth": "deep_partial"}],
+    }
+    assert client.put(
+        f"/api/v1/encounters/{eid}/burn-chart", json=chart, headers={**clin, "If-None-Match": "*"}
+    ).is_success
+    given = {"encounter_id": eid, "fluid_given": [{"volume_ml": 500, "given_at": encounter["time_of_arrival"]}]}
+    client.put(f"/api/v1/encounters/{eid}/resuscitation", json=given, headers={**clin, "If-None-Match": "*"})
+    text = _text(_report(client, clin, eid).content)
+    as_of = re.search(r"As of (\d{4}-\d\d-\d\d \d\d:\d\d) UTC \(([\d.]+) h since injury\)", text)
+    made = dt.datetime.strptime(as_of.group(1), "%Y-%m-%d %H:%M").replace(tzinfo=dt.UTC)
+    injury = dt.datetime.fromisoformat(encounter["time_of_injury"])
+    hours = (made - injury).total_seconds() / 3600
+    assert abs(hours - float(as_of.group(2))) < 0.05  # the clock runs from the injury, not the arrival
+    # Parkland: 4 mL x 70 kg x 13 % = 3640 mL, half in the first 8 h from injury, minus the 500 mL given.
+    expected = (3640 / 2 - 500) / (FIRST_PHASE_H - hours)
+    printed = float(re.search(r"Rate now ([\d,]+) mL/h", text).group(1).replace(",", ""))
+    assert abs(printed - expected) <= 2.0  # the printed minute, not the second, is what the reader sees
+    assert re.search(r"Still due in phase 1,320 mL over [\d.]+ h", text)
