@@ -125,3 +125,22 @@ def test_an_act_is_kept_while_the_advice_holds_and_reset_when_it_changes():
     assert "follow_up.depth_reassessment" not in [r.key for r in later.recommendations]
     with pytest.raises(InvalidInput, match="reason"):
         decision_support.apply_act(first, RecommendationAct(key="tetanus", state="declined"), "dr.a", INJURY)
+
+
+@pytest.mark.parametrize(
+    ("depths", "expected"),
+    [
+        ([BurnDepth.superficial], "simple moisturiser"),
+        ([BurnDepth.superficial, BurnDepth.superficial_partial], "paraffin gauze or a silicone dressing"),
+        ([BurnDepth.superficial_partial, BurnDepth.deep_partial], "no dressing class is given here"),
+        ([BurnDepth.full_thickness], "no dressing class is given here"),
+    ],
+)
+def test_the_dressing_follows_the_deepest_depth_the_clinician_charted(depths, expected):
+    inputs = _inputs()
+    regions = [LundBrowderRegion.trunk_anterior, LundBrowderRegion.lower_arm_left_anterior]
+    entries = [BurnChartEntry(region=r, fraction=0.2, depth=d) for r, d in zip(regions, depths, strict=False)]
+    chart = BurnChart(encounter_id=inputs.encounter.value.id, assessed_at=INJURY, entries=entries)
+    made, _ = wound_care.recommend(_with(inputs, hours=30.0, chart=chart))
+    assert expected in _text(made, "wound_care.dressing")
+    assert ("wound_care.elevation" in [r.key for r in made]) == (len(depths) > 1)  # the second entry is a forearm

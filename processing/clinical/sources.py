@@ -78,3 +78,16 @@ NHS_PARACETAMOL_ADULT = Source(
     url="https://www.nhs.uk/medicines/paracetamol-for-adults/how-and-when-to-take-paracetamol-for-adults/",
     accessed="2026-12-02",
 )
+VICBURNS_DRESSINGS = Source(
+    guideline="Victorian Adult Burns Service: Minor burn wound management (ANZBA Initial Management of Minor Burns)",
+    section="Dressing by depth: epidermal and superficial dermal rows",
+    url="https://vicburns.org.au/minor-burns/minor-burn-wound-managment",
+    accessed="2026-12-02",
+)
+ELEVATION = Source(
+    guideline="Cleland H. Thermal burns: assessment and acute management in the general practice setting. Aust Fam "
+    "Physician 2012;41(6):372-5; Victorian burns first-aid page for children",
+    year=2012,
+    section="Dressings, rest, elevation and oedema control",
+    url="http://www.racgp.org.au/afp/2012/june/thermal-burns-assessment-and-acute-management/",
+)
