@@ -276,6 +276,8 @@ def _valid_body(path: str, record_id: str) -> dict | None:
         "burn-chart": {"encounter_id": record_id, "assessed_at": t},
         "mechanism": {"encounter_id": record_id, "type": "scald"},
         "analyses": {},
+        "acts": {"key": "tetanus", "state": "accepted"},
+        "decision-support": None,
     }
     if part in bodies:
         return bodies[part]
