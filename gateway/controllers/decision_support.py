@@ -5,7 +5,7 @@ from __future__ import annotations
 from litestar import Controller, Response, get, post
 
 from base.web.paths import IdPath
-from base.web.problems import ONE, problems
+from base.web.problems import BODY, ONE, problems
 from base.web.site import AuthedRequest
 from gateway.controllers.common import parse_version, record_response
 from gateway.controllers.records import IfMatch
@@ -49,7 +49,7 @@ class DecisionSupportController(Controller):
         sync_to_thread=True,
         status_code=200,
         summary="Accept a recommendation, or decline it with a reason (If-Match: the version you read)",
-        responses=problems(*ONE, 409, 412, 428),
+        responses=problems(*ONE, *BODY, 409, 412, 422, 428),
     )
     def act(
         self,

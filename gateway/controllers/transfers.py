@@ -24,7 +24,7 @@ class TransferController(Controller):
         summary="Send the encounter as it stands now to the burn center (encrypted; delivered when a link exists)",
         responses={
             200: ResponseSpec(OutboxEntry, description="This version was already sent: its outbox entry"),
-            **problems(*ONE),
+            **problems(*ONE, 409),
         },
     )
     def send(self, encounter_id: IdPath, request: AuthedRequest, services: ServicesDep) -> Response[OutboxEntry]:

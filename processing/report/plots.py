@@ -31,9 +31,9 @@ def nice_step(span: float, ticks: int = 5) -> float:
     return next(m * power for m in (1, 2, 5, 10) if m * power >= raw)
 
 
-def _ticks(top: float) -> tuple[float, list[float]]:
+def _ticks(top: float, ticks: int = 5) -> tuple[float, list[float]]:
     """Axis end (a round number >= top) and the ticks from 0 to it."""
-    step = nice_step(top)
+    step = nice_step(top, ticks)
     end = math.ceil(top / step - 1e-9) * step
     return end, [i * step for i in range(round(end / step) + 1)]
 
@@ -77,7 +77,7 @@ def line_plot(
     reach = max(MARK_REACH * last, 30.0)
     shown = [m for m in marks if 0 <= m[0] <= reach]
     beyond = [m for m in marks if m[0] > reach]
-    x_end, x_ticks = _ticks(max([last, MIN_DAYS] + [m[0] for m in shown]))
+    x_end, x_ticks = _ticks(max([last, MIN_DAYS] + [m[0] for m in shown]), ticks=int(min(max(w / 15, 4), 10)))
     top = max([py for _, py in points] + [1e-9])
     if fit is not None:
         top = max(top, min(max(fit[0], fit[0] + fit[1] * x_end), 1.5 * top if points else math.inf))
