@@ -14,6 +14,7 @@ from processing.report.layout import GREY, URGENT, ReportPDF
 from processing.report.plots import line_plot
 from processing.report.surface_render import render_surface
 from schemas.analysis import DISCLAIMER, AnalysisStatus
+from schemas.errors import InvalidInput
 
 log = logging.getLogger(__name__)
 
@@ -57,7 +58,7 @@ def _analysis(pdf: ReportPDF, page: AnalysisPage, scratch: Path) -> None:
             rgb = render_surface(surface, scaled=result.status is AnalysisStatus.ok)
             cv2.imwrite(str(image), cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR), [cv2.IMWRITE_JPEG_QUALITY, 88])
             pdf.image(str(image), x=pdf.l_margin, y=y, w=width * 0.5, h=width * 0.5 * 0.78)
-        except (OSError, ValueError) as exc:  # an unreadable surface must not stop the report
+        except (OSError, ValueError, InvalidInput) as exc:  # an unreadable surface must not stop the report
             log.warning("analysis %s: surface not rendered: %s", record.job_id, exc)
             pdf.set_xy(pdf.l_margin, y + 10)
             pdf.cell(width * 0.5, 5, "surface could not be drawn")
