@@ -7,11 +7,11 @@ import sqlite3
 import msgspec
 
 from base.accounts.permissions import Principal
-from base.storage import audit
 from base.storage import records as store
 from gateway.services import decision_support
+from gateway.services.computed import store_computed
 from processing.clinical.assessment import assess
-from schemas.base import iso, utcnow
+from schemas.base import utcnow
 from schemas.clinical_results import Assessment, InputRef
 from schemas.config import Config
 from schemas.records import COMPUTED_PARTS, ENCOUNTER_PARTS, RECORD_TYPES, Record, RecordKind
@@ -51,28 +51,5 @@ def refresh_assessments(
             continue
         result = compute(conn, encounter_id, config, utcnow())
         current = store.find_head(conn, RecordKind.assessment, encounter_id)
-        version = current.meta.version + 1 if current else 1
-        data_json = msgspec.json.encode(result)
-        store.insert_version(
-            conn,
-            kind=RecordKind.assessment,
-            record_id=encounter_id,
-            version=version,
-            parent_id=encounter_id,
-            data_json=data_json,
-            created_at=iso(current.meta.created_at) if current else None,
-            updated_by=principal.username,
-            device_id=principal.device_id,
-        )
-        audit.append(
-            conn,
-            action="assessment.compute",
-            user_id=principal.user_id,
-            device_id=principal.device_id,
-            kind=RecordKind.assessment.value,
-            record_id=encounter_id,
-            before_version=current.meta.version if current else None,
-            after_version=version,
-            content_hash=store.version_content_hash(data_json.decode(), False, None),
-        )
+        store_computed(conn, principal, RecordKind.assessment, encounter_id, result, current, "assessment.compute")
         decision_support.refresh(conn, principal, encounter_id, config)

@@ -14,12 +14,12 @@ from pathlib import Path
 import msgspec
 
 from base.accounts.permissions import Principal, require_decide, require_read, require_write
-from base.storage import audit
 from base.storage import records as store
 from gateway.jobs import timeline
+from gateway.services.computed import store_computed
 from processing.clinical import decision_support as rules
 from processing.clinical.decision_inputs import DecisionInputs, Versioned
-from schemas.base import iso, utcnow
+from schemas.base import utcnow
 from schemas.clinical_results import InputRef
 from schemas.config import Config
 from schemas.decision_support import DecisionSupport, RecommendationAct
@@ -92,44 +92,7 @@ def refresh(conn: sqlite3.Connection, principal: Principal | None, encounter_id:
     result = rules.carry_over(previous, fresh)
     if previous is not None and rules.same_advice(previous, result):
         return current
-    return _write(conn, principal, encounter_id, result, current, "decision_support.compute", "")
-
-
-def _write(
-    conn: sqlite3.Connection,
-    principal: Principal | None,
-    encounter_id: str,
-    data: DecisionSupport,
-    current: Record | None,
-    action: str,
-    detail: str,
-) -> Record:
-    version = current.meta.version + 1 if current else 1
-    data_json = msgspec.json.encode(data)
-    record = store.insert_version(
-        conn,
-        kind=KIND,
-        record_id=encounter_id,
-        version=version,
-        parent_id=encounter_id,
-        data_json=data_json,
-        created_at=iso(current.meta.created_at) if current else None,
-        updated_by=principal.username if principal else audit.SERVER_USER,
-        device_id=principal.device_id if principal else None,
-    )
-    audit.append(
-        conn,
-        action=action,
-        user_id=principal.user_id if principal else None,
-        device_id=principal.device_id if principal else None,
-        kind=KIND.value,
-        record_id=encounter_id,
-        before_version=current.meta.version if current else None,
-        after_version=version,
-        detail=detail,
-        content_hash=store.version_content_hash(data_json.decode(), False, None),
-    )
-    return record
+    return store_computed(conn, principal, KIND, encounter_id, result, current, "decision_support.compute")
 
 
 def record_act(conn: sqlite3.Connection, principal: Principal, encounter_id: str, act, if_match: int) -> Record:
@@ -145,7 +108,7 @@ def record_act(conn: sqlite3.Connection, principal: Principal, encounter_id: str
         )
     data = rules.apply_act(msgspec.convert(current.data, DecisionSupport), act, principal.username, utcnow())
     detail = f"{act.key}: {act.state}" + (f": {act.reason.strip()}" if act.reason.strip() else "")
-    return _write(conn, principal, encounter_id, data, current, f"recommendation.{act.state}", detail)
+    return store_computed(conn, principal, KIND, encounter_id, data, current, f"recommendation.{act.state}", detail)
 
 
 def refresh_patient(db, config: Config, patient_id: str) -> None:
