@@ -3,12 +3,12 @@ points joined by a line, an optional fitted trend dashed, and dashed marks at gi
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 
 from fpdf import FPDF
 
 from processing.report import fonts
+from processing.report.plot_scale import MARK_REACH, MIN_DAYS, clip_fit, nice_step, scales, tick_text, ticks
 
 INK = (0, 0, 0)
 AXIS = (90, 90, 90)
@@ -17,45 +17,8 @@ SERIES = (25, 70, 150)
 FIT = (200, 90, 20)
 MARK = (120, 120, 120)
 LABEL_PT = 6.5
-MIN_DAYS = 7.0
-"""The x axis spans at least a week, so a first visit on day 1 is not drawn at the far right."""
-MARK_REACH = 3.0
-"""A mark beyond this many times the last measured day (or day 30) is named at the right edge, not scaled in:
-a far projected closure must not squash the measured visits into the left edge."""
-
-
-def nice_step(span: float, ticks: int = 5) -> float:
-    """A round tick step (1, 2 or 5 times a power of ten) giving about `ticks` intervals over `span`."""
-    raw = max(span, 1e-9) / ticks
-    power = 10 ** math.floor(math.log10(raw))
-    return next(m * power for m in (1, 2, 5, 10) if m * power >= raw)
-
-
-def _ticks(top: float, ticks: int = 5) -> tuple[float, list[float]]:
-    """Axis end (a round number >= top) and the ticks from 0 to it."""
-    step = nice_step(top, ticks)
-    end = math.ceil(top / step - 1e-9) * step
-    return end, [i * step for i in range(round(end / step) + 1)]
-
-
-def _number(value: float, step: float) -> str:
-    digits = max(0, -math.floor(math.log10(step))) if step < 1 else 0
-    return f"{value:.{digits}f}"
-
-
-def _clip_fit(fit: tuple[float, float], x_end: float, y_end: float) -> tuple[float, float, float, float] | None:
-    """The part of y = a + b x inside 0 <= x <= x_end, 0 <= y <= y_end, as (x0, y0, x1, y1); None when outside."""
-    a, b = fit
-    lo, hi = 0.0, x_end
-    if b == 0:
-        if not 0 <= a <= y_end:
-            return None
-    else:
-        t0, t1 = sorted(((0 - a) / b, (y_end - a) / b))
-        lo, hi = max(lo, t0), min(hi, t1)
-    if hi <= lo:
-        return None
-    return lo, a + b * lo, hi, a + b * hi
+_ticks, _number, _clip_fit = ticks, tick_text, clip_fit  # the names the drawing tests have used
+__all__ = ["MARK_REACH", "MIN_DAYS", "line_plot", "nice_step"]
 
 
 def line_plot(
@@ -73,15 +36,9 @@ def line_plot(
     marks: Sequence[tuple[float, str]] = (),
 ) -> None:
     """Draw the plot in the box (x, y, w, h), mm. `fit` = (a, b) draws y = a + b·x dashed; `marks` are (x, label)."""
-    last = max((px for px, _ in points), default=0.0)
-    reach = max(MARK_REACH * last, 30.0)
-    shown = [m for m in marks if 0 <= m[0] <= reach]
-    beyond = [m for m in marks if m[0] > reach]
-    x_end, x_ticks = _ticks(max([last, MIN_DAYS] + [m[0] for m in shown]), ticks=int(min(max(w / 15, 4), 10)))
-    top = max([py for _, py in points] + [1e-9])
-    if fit is not None:
-        top = max(top, min(max(fit[0], fit[0] + fit[1] * x_end), 1.5 * top if points else math.inf))
-    y_end, y_ticks = _ticks(top * 1.08 if top > 1e-9 else 1.0)
+    axes = scales(points, fit, marks, int(min(max(w / 15, 4), 10)))
+    x_end, x_ticks, y_end, y_ticks = axes.x_end, axes.x_ticks, axes.y_end, axes.y_ticks
+    shown, beyond = axes.shown, axes.beyond
 
     left, right, head, foot = x + 11.0, x + w - 2.0, y + 5.5, y + h - 8.5
     sx = lambda v: left + (right - left) * v / x_end  # noqa: E731
@@ -98,7 +55,7 @@ def line_plot(
         cx, cy = x + 2.2, (head + foot) / 2
         with pdf.rotation(90, cx, cy):
             pdf.text(cx - pdf.get_string_width(y_label) / 2, cy + 0.8, y_label)
-        if fit is not None and (seg := _clip_fit(fit, x_end, y_end)) is not None:
+        if fit is not None and (seg := clip_fit(fit, x_end, y_end)) is not None:
             pdf.set_draw_color(*FIT)
             pdf.set_line_width(0.35)
             pdf.set_dash_pattern(dash=1.4, gap=0.9)
@@ -119,12 +76,12 @@ def _axes(pdf: FPDF, box, x_ticks, y_ticks, sx, sy) -> None:
         pdf.set_draw_color(*AXIS)
         pdf.line(left - 1.0, sy(v), left, sy(v))
         pdf.set_xy(left - 11.0, sy(v) - 1.5)
-        pdf.cell(9.6, 3, _number(v, y_step), align="R")
+        pdf.cell(9.6, 3, tick_text(v, y_step), align="R")
     for v in x_ticks:
         pdf.set_draw_color(*AXIS)
         pdf.line(sx(v), foot, sx(v), foot + 1.0)
         pdf.set_xy(sx(v) - 5, foot + 1.2)
-        pdf.cell(10, 3, _number(v, x_step), align="C")
+        pdf.cell(10, 3, tick_text(v, x_step), align="C")
     pdf.set_draw_color(*AXIS)
     pdf.set_line_width(0.25)
     pdf.line(left, head, left, foot)

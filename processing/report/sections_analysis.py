@@ -9,6 +9,7 @@ from pathlib import Path
 import cv2
 
 from processing.report.figures import DIGITS, figure, hours
+from processing.report.healing_series import healing_series
 from processing.report.inputs import AnalysisPage, ReportInputs
 from processing.report.layout import GREY, URGENT, ReportPDF
 from processing.report.plots import line_plot
@@ -148,47 +149,15 @@ def healing(pdf: ReportPDF, r: ReportInputs) -> None:
         return
     pdf.add_page()
     pdf.heading("Healing over time", new_page_if_below=0)
-    measured = [s for s in track.sessions if s.area_cm2 is not None]
-    fit = None
-    if track.healing_rate_cm2_per_day is not None and len(measured) >= 2:
-        mean_day = sum(s.day for s in measured) / len(measured)
-        mean_area = sum(s.area_cm2 for s in measured) / len(measured)
-        slope = -track.healing_rate_cm2_per_day
-        fit = (mean_area - slope * mean_day, slope)
-    marks = []
-    if track.projected_closure_day is not None:
-        marks.append((track.projected_closure_day, "projected closure"))
-    marks.append((21.0, "day 21"))
+    area, relief, volume = healing_series(track)
     width, height = pdf.epw, 52
     y = pdf.get_y()
-    line_plot(
-        pdf,
-        pdf.l_margin,
-        y,
-        width,
-        height,
-        points=[(s.day, s.area_cm2) for s in measured],
-        title="Burn area",
-        y_label="cm²",
-        fit=fit,
-        marks=marks,
-    )
-    relief = [(s.day, s.relief_max_mm) for s in track.sessions if s.relief_max_mm is not None]
-    volume = [(s.day, s.volume_cm3) for s in track.sessions if s.volume_cm3 is not None]
+    plot = {"points": area.points, "title": area.title, "y_label": area.unit}
+    line_plot(pdf, pdf.l_margin, y, width, height, **plot, fit=area.fit, marks=area.all_marks())
     half = (width - 6) / 2
-    line_plot(
-        pdf, pdf.l_margin, y + height + 6, half, 46, points=relief, title="Deepest relief (geometry)", y_label="mm"
-    )
-    line_plot(
-        pdf,
-        pdf.l_margin + half + 6,
-        y + height + 6,
-        half,
-        46,
-        points=volume,
-        title="Volume below reference",
-        y_label="cm³",
-    )
+    for i, series in enumerate((relief, volume)):
+        x = pdf.l_margin + i * (half + 6)
+        line_plot(pdf, x, y + height + 6, half, 46, points=series.points, title=series.title, y_label=series.unit)
     pdf.set_y(y + height + 56)
     rows = [
         [
