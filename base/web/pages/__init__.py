@@ -1,0 +1,1 @@
+"""Server-rendered browser pages (Jinja2 + htmx) of the gateway."""

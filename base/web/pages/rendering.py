@@ -1,0 +1,101 @@
+"""Page rendering shared by the gateway's and the center's faces: one Jinja2 environment (autoescaping, undefined
+names are errors), the layout's context, and HTML error pages for the one error map (base/web/errors.py)."""
+
+from __future__ import annotations
+
+import datetime as dt
+from dataclasses import dataclass
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from jinja2 import Environment, FileSystemLoader, StrictUndefined, select_autoescape
+from litestar import Request, Response
+from litestar.contrib.jinja import JinjaTemplateEngine
+from litestar.response import Redirect, Template
+from litestar.template import TemplateConfig
+from markupsafe import Markup
+
+from base import __version__
+from base.accounts.permissions import Principal
+from base.web.pages.session import request_csrf_token
+
+BASE_TEMPLATES = Path(__file__).resolve().parents[1] / "templates"
+SITE_NAME_KEY = "site_name"
+"""app.state key: "Clinic gateway" or "Burn center", shown in every page's header."""
+NAV_KEY = "nav"
+"""app.state key: the header's links, a list of NavItem."""
+
+
+@dataclass(frozen=True)
+class NavItem:
+    label: str
+    href: str
+    roles: frozenset[str]
+    """Role values that see the link (the page itself checks again)."""
+
+
+def local_time(value: dt.datetime | None, with_date: bool = True) -> str:
+    """A stored instant as the clinic reads it: the machine's local zone, to the minute."""
+    if value is None:
+        return "—"
+    local = value.astimezone()
+    return local.strftime("%Y-%m-%d %H:%M" if with_date else "%H:%M")
+
+
+def number(value: float | None, digits: int = 1, unit: str = "") -> str:
+    if value is None:
+        return "—"
+    text = f"{value:.{digits}f}"
+    return f"{text} {unit}".strip()
+
+
+def environment(directories: Sequence[Path]) -> Environment:
+    env = Environment(
+        loader=FileSystemLoader([*directories, BASE_TEMPLATES]),
+        autoescape=select_autoescape(default=True, default_for_string=True),
+        undefined=StrictUndefined,
+        trim_blocks=True,
+        lstrip_blocks=True,
+    )
+    env.filters["local_time"] = local_time
+    env.filters["number"] = number
+    env.globals["version"] = __version__
+    return env
+
+
+def template_config(directories: Sequence[Path]) -> TemplateConfig:
+    return TemplateConfig(instance=JinjaTemplateEngine.from_environment(environment(directories)))
+
+
+def page(request: Request, template: str, status_code: int = 200, **context: Any) -> Template:
+    """A full page or, for an htmx request that asks for one, the named fragment template."""
+    user = request.scope.get("user")
+    principal = user if isinstance(user, Principal) else None
+    return Template(
+        template_name=template,
+        status_code=status_code,
+        context={
+            "principal": principal,
+            "csrf_token": request_csrf_token(request),
+            "site_name": request.app.state.get(SITE_NAME_KEY, "burnedge"),
+            "path": request.url.path,
+            "nav": request.app.state.get(NAV_KEY, []),
+            **context,
+        },
+    )
+
+
+def svg(markup: str) -> Markup:
+    """Mark SVG made by processing/views (which escapes every text it draws) as safe to embed."""
+    return Markup(markup)
+
+
+def error_page(request: Request, status: int, title: str, detail: str) -> Response:
+    """The HTML face of a problem: a person reads what happened and what to do."""
+    if status == 401:
+        target = request.url.path
+        if request.url.query:
+            target += "?" + request.url.query
+        return Redirect(path="/sign-in", query_params={"next": target}, status_code=303)
+    return page(request, "error.html", status_code=status, status=status, title=title, detail=detail)
