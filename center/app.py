@@ -24,6 +24,8 @@ from base.web.account_controllers import AdminController, AuthController
 from base.web.authentication import session_auth
 from base.web.errors import EXCEPTION_HANDLERS
 from base.web.health import health
+from base.web.pages.api_docs import offline_openapi_plugins
+from base.web.pages.assets import static_files
 from base.web.paths import IdPath, SiteIdPath
 from base.web.site import AuthedRequest
 from center.cases import CaseService
@@ -144,7 +146,7 @@ class SitesController(Controller):
 
 def create_central_app(config: Config, services: CentralServices) -> Litestar:
     return Litestar(
-        route_handlers=[health, AuthController, AdminController, CaseController, SitesController],
+        route_handlers=[health, AuthController, AdminController, CaseController, SitesController, static_files()],
         dependencies={"services": Provide(lambda: services, sync_to_thread=False, use_cache=True)},
         middleware=[session_auth],
         exception_handlers=EXCEPTION_HANDLERS,
@@ -152,6 +154,7 @@ def create_central_app(config: Config, services: CentralServices) -> Litestar:
             title="burnedge burn center",
             version=__version__,
             path="/schema",
+            render_plugins=offline_openapi_plugins(),
             description="Cases received from clinics and consultants' advice back. "
             "Decision support, never autonomous decisions.",
         ),

@@ -13,6 +13,10 @@ from base.web.authentication import session_auth
 from base.web.errors import EXCEPTION_HANDLERS
 from base.web.health import health
 from base.web.openapi import ClosedStructSchemaPlugin
+from base.web.pages.api_docs import offline_openapi_plugins
+from base.web.pages.assets import static_files
+from base.web.pages.protection import csrf_protection, security_headers
+from base.web.pages.rendering import NAV_KEY, SITE_NAME_KEY, template_config
 from gateway.controllers.analyses import AnalysisController
 from gateway.controllers.assets import AssetController
 from gateway.controllers.decision_support import DecisionSupportController
@@ -24,6 +28,7 @@ from gateway.controllers.transfers import TransferController
 from gateway.controllers.uploads import UploadController
 from gateway.dependencies import Services, provide_services
 from gateway.jobs.supervisor import Workers
+from gateway.pages import NAV, SITE_NAME, TEMPLATES, page_controllers
 from gateway.scheduler import start_scheduler
 from gateway.storage.database import Database
 from schemas.config import Config
@@ -50,11 +55,14 @@ def create_app(config: Config, *, start_workers: bool = False) -> Litestar:
             AssetController,
             AnalysisController,
             TransferController,
+            static_files(),
+            *page_controllers(),
         ],
         dependencies={
             "services": Provide(provide_services, sync_to_thread=False, use_cache=True),
         },
-        middleware=[session_auth],
+        middleware=[security_headers, csrf_protection, session_auth],
+        template_config=template_config([TEMPLATES]),
         exception_handlers=EXCEPTION_HANDLERS,
         openapi_config=OpenAPIConfig(
             title="burnedge gateway",
@@ -62,8 +70,9 @@ def create_app(config: Config, *, start_workers: bool = False) -> Litestar:
             description="Clinical record, capture and sync API of a burnedge clinic gateway. "
             "Outputs are decision support, never autonomous decisions.",
             path="/schema",
+            render_plugins=offline_openapi_plugins(),
         ),
-        state=State({"services": services}),
+        state=State({"services": services, SITE_NAME_KEY: SITE_NAME, NAV_KEY: NAV}),
         on_startup=[lambda app: _start_background(app, services, workers)],
         on_shutdown=[lambda app: _stop_background(app, workers), lambda app: db.close()],
         request_max_body_size=config.gateway.max_body_bytes,

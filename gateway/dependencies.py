@@ -21,6 +21,7 @@ from gateway.services.frames import FrameService
 from gateway.services.phone_sync import PhoneSync
 from gateway.services.records import RecordService
 from gateway.services.reports import ReportService
+from gateway.services.thumbnails import ThumbnailService
 from gateway.services.transfers import TransferService
 from gateway.services.uploads import UploadService
 from gateway.storage.database import Database
@@ -42,6 +43,7 @@ class Services:
     analyses: AnalysisService
     transfers: TransferService
     reports: ReportService
+    thumbnails: ThumbnailService
     run_sync_now: Callable[[], None] = lambda: None
     """Starts a sync round at once (set by the scheduler when [sync] enabled)."""
 
@@ -67,6 +69,7 @@ class Services:
             analyses=AnalysisService(db, config, assets),
             transfers=TransferService(db, config, reports),
             reports=reports,
+            thumbnails=ThumbnailService(config, assets),
         )
 
 

@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 import enum
+from typing import Annotated
+
+import msgspec
 
 from schemas.base import Fraction, Id, Message, Timestamp
 
@@ -98,3 +101,32 @@ class BurnChart(Message):
     special_areas: list[SpecialAreaInvolvement] = []
     """Critical areas the regions alone cannot show (face, perineum, joints)."""
     age_adjustment: AgeAdjustment = AgeAdjustment.band
+
+
+Percent = Annotated[float, msgspec.Meta(ge=0, le=100)]
+
+
+class RegionCharting(Message):
+    """The burn chart page's editor for one region: the share of the region burned at each depth, in percent of
+    the region (not of the body). The page turns it into the chart's entries for that region."""
+
+    superficial_partial_percent: Percent = 0.0
+    """Superficial partial thickness: % of this region."""
+    deep_partial_percent: Percent = 0.0
+    """Deep partial thickness: % of this region."""
+    full_thickness_percent: Percent = 0.0
+    """Full thickness: % of this region."""
+    superficial_percent: Percent = 0.0
+    """Superficial (epidermal) only: charted but not counted in %TBSA."""
+    circumferential: bool = False
+    """The burn goes all the way round (limb or trunk): escharotomy may be needed."""
+
+    def __post_init__(self) -> None:
+        total = (
+            self.superficial_partial_percent
+            + self.deep_partial_percent
+            + self.full_thickness_percent
+            + self.superficial_percent
+        )
+        if total > 100.0 + 1e-9:
+            raise ValueError(f"the depths add up to {total:g} % of the region: at most 100 %")

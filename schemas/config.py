@@ -43,6 +43,9 @@ class SecurityConfig(Message):
     """Lifetime of a login session (one clinical shift by default)."""
     pairing_code_ttl_s: Annotated[int, msgspec.Meta(ge=30)] = 600
     """How long an unused one-time pairing code stays valid."""
+    cookie_secure: bool = False
+    """Mark the pages' session cookie Secure: set it when browsers reach the server over HTTPS (a TLS proxy in
+    front); over plain HTTP on the clinic's Wi-Fi a Secure cookie would never be sent back."""
     paired_device_roles: list[Literal["clinician", "nurse", "admin", "consultant"]] = []
     """Roles that may log in only from a paired phone (X-Device-Token); empty lets every role use a workstation."""
     argon2_time_cost: Annotated[int, msgspec.Meta(ge=1)] = 3

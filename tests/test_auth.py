@@ -13,10 +13,17 @@ from harness.processes import PASSWORD, login
 from schemas.accounts import Role
 from schemas.errors import AuthenticationFailed, TooManyAttempts
 from schemas.ids import uuid7
+from base.web.pages.session import is_page_path
 from tests.conftest import make_user
 
 # The ways in: logging in and pairing a phone. Everything else needs a session.
-UNAUTHENTICATED = {("POST", "/api/v1/auth/login"), ("POST", "/api/v1/auth/pair"), ("GET", "/health")}
+UNAUTHENTICATED = {
+    ("POST", "/api/v1/auth/login"),
+    ("POST", "/api/v1/auth/pair"),
+    ("GET", "/health"),
+    ("GET", "/sign-in"),
+    ("POST", "/sign-in"),
+}
 
 
 def _concrete(path: str) -> str:
@@ -26,14 +33,23 @@ def _concrete(path: str) -> str:
 def test_every_endpoint_except_health_and_the_ways_in_requires_authentication(app, client):
     checked = 0
     for route in app.routes:
-        if route.path.startswith("/schema"):
+        # The API docs and the pages' static files are public (tests/test_page_assets.py).
+        if route.path.startswith(("/schema", "/static/")):
             continue
         for method in sorted(route.methods - {"OPTIONS", "HEAD"}):
             if (method, route.path) in UNAUTHENTICATED:
                 continue
-            r = client.request(method, _concrete(route.path), json={})
-            assert r.status_code == 401, f"{method} {route.path} answered {r.status_code}"
-            assert r.headers["content-type"].startswith("application/problem+json")
+            r = client.request(method, _concrete(route.path), json={}, follow_redirects=False)
+            if is_page_path(route.path):
+                # A browser page: reading one sends to the sign-in form; a write without its CSRF token is refused
+                # before anything else is looked at.
+                expected = 303 if method == "GET" else 403
+                assert r.status_code == expected, f"{method} {route.path} answered {r.status_code}"
+                if method == "GET":
+                    assert r.headers["location"].startswith("/sign-in?next=")
+            else:
+                assert r.status_code == 401, f"{method} {route.path} answered {r.status_code}"
+                assert r.headers["content-type"].startswith("application/problem+json")
             checked += 1
     assert checked >= 30
 

@@ -6,6 +6,7 @@ from __future__ import annotations
 from litestar.connection import ASGIConnection
 from litestar.middleware import AbstractAuthenticationMiddleware, AuthenticationResult, DefineMiddleware
 
+from base.web.pages.session import SESSION_COOKIE
 from schemas.errors import AuthenticationFailed, PasswordChangeRequired
 
 EXCLUDE_OPT_KEY = "exclude_from_auth"
@@ -21,13 +22,22 @@ MUST_CHANGE_PASSWORD = (
 
 class SessionAuthMiddleware(AbstractAuthenticationMiddleware):
     async def authenticate_request(self, connection: ASGIConnection) -> AuthenticationResult:
-        scheme, _, token = connection.headers.get("authorization", "").partition(" ")
-        if scheme.lower() != "bearer" or not token.strip():
+        token = _bearer(connection) or connection.cookies.get(SESSION_COOKIE, "")
+        if not token:
             raise AuthenticationFailed("log in first: send Authorization: Bearer <access_token>")
-        principal = connection.app.state.services.accounts.authenticate(token.strip())
+        principal = connection.app.state.services.accounts.authenticate(token)
         if principal.must_change_password and not connection.route_handler.opt.get(BEFORE_PASSWORD_CHANGE_OPT_KEY):
             raise PasswordChangeRequired(MUST_CHANGE_PASSWORD)
-        return AuthenticationResult(user=principal, auth=token.strip())
+        return AuthenticationResult(user=principal, auth=token)
 
 
-session_auth = DefineMiddleware(SessionAuthMiddleware, exclude=["^/schema"], exclude_from_auth_key=EXCLUDE_OPT_KEY)
+def _bearer(connection: ASGIConnection) -> str:
+    """The Authorization header's token; a browser's pages send the session cookie instead (CSRF-checked on
+    writes by base/web/pages/protection.py, which runs first)."""
+    scheme, _, token = connection.headers.get("authorization", "").partition(" ")
+    return token.strip() if scheme.lower() == "bearer" else ""
+
+
+session_auth = DefineMiddleware(
+    SessionAuthMiddleware, exclude=["^/schema", "^/static/"], exclude_from_auth_key=EXCLUDE_OPT_KEY
+)

@@ -14,6 +14,8 @@ from http import HTTPStatus
 from litestar import Request, Response
 from litestar.exceptions import HTTPException, ValidationException
 
+from base.web.pages.rendering import error_page
+from base.web.pages.session import is_page_path
 from schemas.capture import TUS_VERSION
 from schemas.errors import BurnedgeError, TooManyAttempts, TusVersionUnsupported
 from schemas.problem import FieldProblem, Problem
@@ -24,7 +26,10 @@ TUS_PATH = "/api/v1/uploads"
 _TYPE_BASE = "https://burnedge.invalid/problems/"
 
 
-def _respond(problem: Problem, headers: dict[str, str] | None = None) -> Response:
+def _respond(problem: Problem, headers: dict[str, str] | None = None, request: Request | None = None) -> Response:
+    if request is not None and is_page_path(request.url.path):
+        # A browser page: the same problem as HTML (a sign-in redirect for 401).
+        return error_page(request, problem.status, problem.title, problem.detail)
     return Response(content=problem, status_code=problem.status, media_type=PROBLEM_JSON, headers=headers)
 
 
@@ -51,7 +56,7 @@ def burnedge_error(request: Request, exc: BurnedgeError) -> Response:
         errors=exc.errors,
         current=current,
     )
-    return _respond(problem, headers)
+    return _respond(problem, headers, request)
 
 
 def validation_error(request: Request, exc: ValidationException) -> Response:
@@ -70,7 +75,7 @@ def validation_error(request: Request, exc: ValidationException) -> Response:
         instance=request.url.path,
         errors=errors,
     )
-    return _respond(problem)
+    return _respond(problem, request=request)
 
 
 _UNKNOWN_FIELD = re.compile(r"unknown field `([^`]+)`")
@@ -92,7 +97,7 @@ def http_error(request: Request, exc: HTTPException) -> Response:
         detail=str(exc.detail),
         instance=request.url.path,
     )
-    return _respond(problem, exc.headers)
+    return _respond(problem, exc.headers, request)
 
 
 def too_deep(request: Request, exc: RecursionError) -> Response:
@@ -109,7 +114,7 @@ def too_deep(request: Request, exc: RecursionError) -> Response:
         "levels)",
         instance=request.url.path,
     )
-    return _respond(problem)
+    return _respond(problem, request=request)
 
 
 def unexpected_error(request: Request, exc: Exception) -> Response:
@@ -121,7 +126,7 @@ def unexpected_error(request: Request, exc: Exception) -> Response:
         detail="the gateway hit an unexpected error; nothing partial was stored. The log has details.",
         instance=request.url.path,
     )
-    return _respond(problem)
+    return _respond(problem, request=request)
 
 
 def _title(status: int) -> str:

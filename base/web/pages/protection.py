@@ -24,7 +24,7 @@ from schemas.errors import Forbidden
 CONTENT_SECURITY_POLICY = "; ".join(
     [
         "default-src 'self'",
-        "script-src 'self'",
+        "script-src 'self' 'wasm-unsafe-eval'",
         # <model-viewer> styles its shadow DOM with <style> elements; scripts stay 'self' only.
         "style-src 'self' 'unsafe-inline'",
         "img-src 'self' data: blob:",

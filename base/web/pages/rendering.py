@@ -4,20 +4,21 @@ names are errors), the layout's context, and HTML error pages for the one error 
 from __future__ import annotations
 
 import datetime as dt
-from dataclasses import dataclass
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from jinja2 import Environment, FileSystemLoader, StrictUndefined, select_autoescape
 from litestar import Request, Response
-from litestar.contrib.jinja import JinjaTemplateEngine
+from litestar.plugins.jinja import JinjaTemplateEngine
 from litestar.response import Redirect, Template
 from litestar.template import TemplateConfig
 from markupsafe import Markup
 
 from base import __version__
 from base.accounts.permissions import Principal
+from base.web.pages.forms_fields import errors_in
 from base.web.pages.session import request_csrf_token
 
 BASE_TEMPLATES = Path(__file__).resolve().parents[1] / "templates"
@@ -61,6 +62,7 @@ def environment(directories: Sequence[Path]) -> Environment:
     env.filters["local_time"] = local_time
     env.filters["number"] = number
     env.globals["version"] = __version__
+    env.globals["errors_in"] = errors_in
     return env
 
 

@@ -43,9 +43,7 @@ def request_csrf_token(request: Request) -> str:
 
 
 def _cookie(name: str, value: str, *, max_age: int, secure: bool) -> Cookie:
-    return Cookie(
-        key=name, value=value, max_age=max_age, path="/", httponly=True, samesite="strict", secure=secure
-    )
+    return Cookie(key=name, value=value, max_age=max_age, path="/", httponly=True, samesite="strict", secure=secure)
 
 
 def sign_in_cookie(secure: bool) -> tuple[Cookie, str]:

@@ -101,4 +101,3 @@ def _password_problem(exc: msgspec.ValidationError) -> str:
     if "new_password" in str(exc):
         return "the new password must have at least 10 characters"
     return "enter your current password"
-

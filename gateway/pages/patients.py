@@ -1,0 +1,135 @@
+"""The patient pages: the list with search, a new patient, one patient with encounters and healing, a new
+encounter."""
+
+from __future__ import annotations
+
+import datetime as dt
+from typing import Annotated
+
+from litestar import Controller, get, post
+from litestar.params import QueryParameter
+from litestar.response import Redirect, Template
+
+from base.web.pages.forms import form_fields
+from base.web.pages.rendering import page, svg
+from base.web.paths import IdPath
+from base.web.site import AuthedRequest
+from gateway.dependencies import ServicesDep
+from gateway.pages.common import FormBody, parse_or_errors, posted_id
+from processing.views.healing_plot_svg import healing_plots_svg
+from schemas.accounts import Role
+from schemas.errors import NotFound
+from schemas.ids import uuid7
+from schemas.patient import Encounter, EncounterMode, Patient
+from schemas.records import Record, RecordKind
+
+Search = Annotated[str, QueryParameter(max_length=200, description="Part of a name or an identifier")]
+PATIENT_SKIP = frozenset({"id"})
+ENCOUNTER_SKIP = frozenset({"id", "patient_id"})
+
+
+def patient_name(data: dict) -> str:
+    name = " ".join(p for p in (data.get("given_name", ""), data.get("family_name", "")) if p)
+    return name or "Unnamed patient"
+
+
+def _matches(record: Record, query: str) -> bool:
+    data = record.data
+    haystack = " ".join(
+        str(v)
+        for v in (data.get("given_name"), data.get("family_name"), data.get("medical_record_number"), record.meta.id)
+        if v
+    )
+    return all(word in haystack.casefold() for word in query.casefold().split())
+
+
+class PatientPages(Controller):
+    path = "/"
+    include_in_schema = False
+
+    @get("/", sync_to_thread=False)
+    def start(self, request: AuthedRequest) -> Redirect:
+        """Administrators do not read patients' records: their start page is the admin page."""
+        return Redirect(path="/admin" if request.user.role == Role.admin else "/patients", status_code=303)
+
+    @get("/patients", sync_to_thread=False)
+    def list_(self, request: AuthedRequest, services: ServicesDep, q: Search = "") -> Template:
+        patients = services.records.list_records(request.user, RecordKind.patient, limit=None)
+        if q.strip():
+            patients = [p for p in patients if _matches(p, q)]
+        patients.sort(key=lambda r: r.meta.updated_at, reverse=True)
+        return page(request, "patients.html", patients=patients, q=q, name=patient_name)
+
+    @get("/patients/new", sync_to_thread=False)
+    def new_form(self, request: AuthedRequest) -> Template:
+        fields = form_fields(Patient, skip=PATIENT_SKIP)
+        return page(request, "patient_new.html", fields=fields, record_id=uuid7(), errors={})
+
+    @post("/patients/new", sync_to_thread=True, status_code=303)
+    def create(self, request: AuthedRequest, data: FormBody, services: ServicesDep) -> Template | Redirect:
+        record_id = posted_id(data)
+        body, errors = parse_or_errors(Patient, data, {"id": record_id})
+        if errors:
+            fields = form_fields(Patient, raw=data, errors=errors, skip=PATIENT_SKIP)
+            return page(request, "patient_new.html", 422, fields=fields, record_id=record_id, errors=errors)
+        services.records.create(request.user, RecordKind.patient, record_id, body)
+        return Redirect(path=f"/patients/{record_id}", status_code=303)
+
+    @get("/patients/{patient_id:str}", sync_to_thread=False)
+    def read(self, patient_id: IdPath, request: AuthedRequest, services: ServicesDep) -> Template:
+        who = request.user
+        patient = services.records.get(who, RecordKind.patient, patient_id)
+        encounters = services.records.list_records(who, RecordKind.encounter, parent_id=patient_id, limit=None)
+        encounters.sort(key=lambda r: r.data.get("time_of_arrival", ""), reverse=True)
+        try:
+            track = services.analyses.healing(who, patient_id)
+            plots = [(title, svg(markup)) for title, markup in healing_plots_svg(track)]
+        except NotFound:
+            track, plots = None, []
+        return page(
+            request,
+            "patient.html",
+            patient=patient,
+            name=patient_name(patient.data),
+            encounters=encounters,
+            track=track,
+            plots=plots,
+        )
+
+    @get("/patients/{patient_id:str}/encounters/new", sync_to_thread=False)
+    def new_encounter_form(self, request: AuthedRequest, patient_id: IdPath, services: ServicesDep) -> Template:
+        patient = services.records.get(request.user, RecordKind.patient, patient_id)
+        now = dt.datetime.now().astimezone().strftime("%Y-%m-%dT%H:%M")
+        raw = {"mode": EncounterMode.emergency.value, "time_of_arrival": now, "clinician": request.user.username}
+        fields = form_fields(Encounter, raw=raw, skip=ENCOUNTER_SKIP)
+        return page(
+            request,
+            "encounter_new.html",
+            patient=patient,
+            name=patient_name(patient.data),
+            fields=fields,
+            record_id=uuid7(),
+            errors={},
+        )
+
+    @post("/patients/{patient_id:str}/encounters/new", sync_to_thread=True, status_code=303)
+    def create_encounter(
+        self, request: AuthedRequest, patient_id: IdPath, data: FormBody, services: ServicesDep
+    ) -> Template | Redirect:
+        patient = services.records.get(request.user, RecordKind.patient, patient_id)
+        record_id = posted_id(data)
+        body, errors = parse_or_errors(Encounter, data, {"id": record_id, "patient_id": patient_id})
+        if errors:
+            fields = form_fields(Encounter, raw=data, errors=errors, skip=ENCOUNTER_SKIP)
+            return page(
+                request,
+                "encounter_new.html",
+                422,
+                patient=patient,
+                name=patient_name(patient.data),
+                fields=fields,
+                record_id=record_id,
+                errors=errors,
+            )
+        services.records.create(request.user, RecordKind.encounter, record_id, body)
+        return Redirect(path=f"/encounters/{record_id}", status_code=303)
