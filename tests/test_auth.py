@@ -8,12 +8,12 @@ import threading
 import pytest
 from litestar.testing import TestClient
 
+from base.web.pages.session import is_page_path
 from harness.bodies import encounter_body, now, patient_body
 from harness.processes import PASSWORD, login
 from schemas.accounts import Role
 from schemas.errors import AuthenticationFailed, TooManyAttempts
 from schemas.ids import uuid7
-from base.web.pages.session import is_page_path
 from tests.conftest import make_user
 
 # The ways in: logging in and pairing a phone. Everything else needs a session.

@@ -8,7 +8,7 @@ import re
 import pytest
 
 from harness.processes import PASSWORD
-from schemas.accounts import PairRequest, Role
+from schemas.accounts import PairingCodeRequest, PairRequest, Role
 from schemas.errors import AuthenticationFailed
 from tests.conftest import make_user
 from tests.pages_helpers import csrf_from, post_form, sign_in
@@ -147,8 +147,6 @@ def test_a_pairing_code_needs_a_device_name(admin):
 def test_revoking_a_phone_stops_its_token(admin, client, services):
     make_user(services, "nora", Role.nurse)
     ada = services.accounts.authenticate(client.cookies["burnedge_session"])
-    from schemas.accounts import PairingCodeRequest
-
     code = services.accounts.create_pairing_code(ada, PairingCodeRequest(device_name="ward 2 phone"))
     device = services.accounts.pair(PairRequest(code=code.code), client="test")
     session = services.accounts.login("nora", PASSWORD, client="test", device_token=device.device_token)

@@ -6,10 +6,10 @@ from __future__ import annotations
 
 import pytest
 
-from tests.conftest import make_user
-from tests.pages_helpers import csrf_from, post_form, sign_in
 from schemas.accounts import Role
 from schemas.records import RecordKind
+from tests.conftest import make_user
+from tests.pages_helpers import csrf_from, post_form, sign_in
 
 
 @pytest.fixture

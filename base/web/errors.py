@@ -13,11 +13,12 @@ from http import HTTPStatus
 
 from litestar import Request, Response
 from litestar.exceptions import HTTPException, ValidationException
+from litestar.response import Redirect
 
 from base.web.pages.rendering import error_page
 from base.web.pages.session import is_page_path
 from schemas.capture import TUS_VERSION
-from schemas.errors import BurnedgeError, TooManyAttempts, TusVersionUnsupported
+from schemas.errors import BurnedgeError, PasswordChangeRequired, TooManyAttempts, TusVersionUnsupported
 from schemas.problem import FieldProblem, Problem
 
 log = logging.getLogger("burnedge.gateway")
@@ -44,6 +45,9 @@ def burnedge_error(request: Request, exc: BurnedgeError) -> Response:
         headers["Tus-Resumable"] = TUS_VERSION
         if isinstance(exc, TusVersionUnsupported):
             headers["Tus-Version"] = TUS_VERSION
+    if isinstance(exc, PasswordChangeRequired) and is_page_path(request.url.path):
+        # A temporary password set by an administrator: the browser goes where it can be changed.
+        return Redirect(path="/account/password", status_code=303)
     current = exc.current
     if current is not None and getattr(current, "meta", None) is not None:
         headers["ETag"] = f'"{current.meta.version}"'

@@ -24,7 +24,7 @@ from processing.views.body_chart_svg import REGION_LABELS, body_chart_svg, chart
 from schemas.burn_chart import BurnChart, BurnChartEntry, BurnDepth, LundBrowderRegion, RegionCharting
 from schemas.clinical_results import Assessment
 from schemas.errors import InvalidInput, NotFound, VersionMismatch
-from schemas.records import Record, RecordKind
+from schemas.records import RecordKind
 
 RegionQuery = Annotated[str, QueryParameter(max_length=60, description="The region being edited")]
 _DEPTH_FIELDS = {

@@ -10,9 +10,9 @@ import msgspec
 from litestar.enums import RequestEncodingType
 from litestar.params import Body
 
+from base.accounts.permissions import WRITE, Principal
 from base.web.pages.forms import FormInvalid, field_errors, parse_form
 from gateway.dependencies import Services
-from base.accounts.permissions import WRITE, Principal
 from schemas.base import ID_PATTERN
 from schemas.errors import Conflict, InvalidInput, VersionMismatch
 from schemas.records import Record, RecordKind

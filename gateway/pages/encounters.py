@@ -20,7 +20,6 @@ from gateway.pages.common import (
     FormBody,
     may_write,
     parse_or_errors,
-    posted_text,
     posted_version,
     save_part,
     saved_first,

@@ -37,9 +37,9 @@ DONE = {
 }
 """?done= keys -> the confirmation shown after a write (an unknown key shows nothing)."""
 HELP = {
-    "username": "2 to 64 characters: lower-case letters, digits, dot, dash or underscore.",
+    "username": "2 to 64 characters: lower-case letters, digits, dot, dash or underscore; it starts with a letter or "
+    "digit.",
     "password": "At least 10 characters.",
-    "device_name": "What the phone is called in the list below, e.g. “ward 2 phone”.",
 }
 """Help the schemas do not carry (their patterns would read badly as messages)."""
 Done = Annotated[str, QueryParameter(max_length=40)]

@@ -1,0 +1,227 @@
+"""The clinic's and the burn center's pages in a real browser (Playwright driving Debian's Chromium) against a real
+gateway process and a real center process on loopback: the clinician's flow end to end, from sign-in to the
+consultant's advice back on the encounter. Screenshots of each step are saved as test artifacts
+(harness/browser.py)."""
+
+from __future__ import annotations
+
+import datetime as dt
+import re
+import subprocess
+import time
+
+import pytest
+
+from harness.browser import DESKTOP, PHONE, TABLET, browser_missing, distinct_colours, launch, shot
+from harness.processes import PASSWORD
+from harness.sites import Sites
+
+pytestmark = pytest.mark.skipif(bool(browser_missing()), reason=browser_missing() or "browser present")
+
+ANALYSIS_TIMEOUT_MS = 300_000
+
+
+@pytest.fixture(scope="module")
+def phantom(tmp_path_factory):
+    from tests.phantom_helpers import render_small_patch
+
+    return render_small_patch(tmp_path_factory.mktemp("phantom"))
+
+
+@pytest.fixture(scope="module")
+def sites(tmp_path_factory):
+    sites = Sites(tmp_path_factory.mktemp("sites"))
+    sites.gateway.env["BURNEDGE_JOBS_WORKERS"] = "1"
+    sites.set_up()
+    sites.center.start()
+    sites.gateway.start()
+    yield sites
+    sites.stop()
+
+
+@pytest.fixture(scope="module")
+def browser():
+    from playwright.sync_api import sync_playwright
+
+    with sync_playwright() as playwright:
+        browser = launch(playwright)
+        yield browser
+        browser.close()
+
+
+def expect(locator):
+    from playwright.sync_api import expect as playwright_expect
+
+    return playwright_expect(locator)
+
+
+def sign_in(page, url: str, username: str) -> None:
+    page.goto(url + "/")
+    page.wait_for_url(re.compile(r"/sign-in"))
+    page.get_by_label("Username").fill(username)
+    page.get_by_label("Password").fill(PASSWORD)
+    page.get_by_role("button", name="Sign in").click()
+    page.wait_for_load_state()
+
+
+def poll(page, script: str, timeout_s: float = 30.0) -> None:
+    """Wait until `script` (an expression) is true in the page. Polled from here with page.evaluate, which the
+    pages' CSP allows, unlike wait_for_function's string evaluation."""
+    deadline = time.monotonic() + timeout_s
+    while not page.evaluate(script):
+        if time.monotonic() > deadline:
+            raise AssertionError(f"timed out after {timeout_s:g} s waiting for {script}")
+        page.wait_for_timeout(200)
+
+
+def tab(page, name: str) -> None:
+    page.get_by_role("navigation", name="Encounter sections").get_by_role("link", name=name, exact=True).click()
+    page.wait_for_load_state()
+
+
+def save_form(page) -> None:
+    page.locator("main form.panel button[type=submit]").first.click()
+    page.wait_for_load_state()
+
+
+def pdf_text(path) -> str:
+    return subprocess.run(["pdftotext", "-layout", str(path), "-"], capture_output=True, text=True, check=True).stdout
+
+
+def test_the_clinicians_flow_end_to_end_and_the_consultants_advice_back(sites, browser, phantom, tmp_path):
+    context = browser.new_context(viewport={"width": DESKTOP[0], "height": DESKTOP[1]}, accept_downloads=True)
+    page = context.new_page()
+    problems: list[str] = []
+    page.on("console", lambda m: problems.append(m.text) if m.type == "error" else None)
+    page.on("pageerror", lambda e: problems.append(str(e)))
+    clinic = sites.gateway.url
+
+    sign_in(page, clinic, "clin")
+    shot(page, "01-patients-empty")
+    page.get_by_role("link", name="New patient").click()
+    page.get_by_label("Given name").fill("Amina")
+    page.get_by_label("Family name").fill("Diallo")
+    page.get_by_label("Age estimate (years)").fill("34")
+    page.get_by_label("Weight (kg)").fill("62")
+    page.get_by_label("Weight source").select_option("measured")
+    page.get_by_label("Medical record number").fill("MRN-1042")
+    shot(page, "02-new-patient")
+    page.get_by_role("button", name="Create patient").click()
+    page.wait_for_url(re.compile(r"/patients/[0-9a-f-]+$"))
+
+    page.get_by_role("link", name="New encounter").click()
+    injured = (dt.datetime.now() - dt.timedelta(hours=2)).strftime("%Y-%m-%dT%H:%M")
+    page.get_by_label("Time of injury").fill(injured)
+    page.get_by_role("button", name="Open encounter").click()
+    page.wait_for_url(re.compile(r"/encounters/[0-9a-f-]+$"))
+    encounter_url = page.url
+
+    tab(page, "ABCDE")
+    page.get_by_label("SpO2 (%)").fill("97")
+    page.get_by_label("Heart rate (/min)").fill("112")
+    shot(page, "03-primary-survey")
+    save_form(page)
+    assert "Primary survey (ABCDE) saved" in page.inner_text("main")
+    tab(page, "Secondary survey")
+    page.get_by_label("Notes").fill("Isolated scald to the chest and forearm; no other injury found.")
+    save_form(page)
+    tab(page, "Mechanism")
+    page.get_by_label("Type").select_option("scald")
+    page.get_by_label("Agent").fill("boiling water")
+    save_form(page)
+
+    # The body diagram: a region tapped opens its editor in place; saving updates %TBSA and the fluids in place.
+    tab(page, "Burn chart")
+    page.evaluate("window.__sameDocument = true")
+    page.locator('a[data-region="trunk_anterior"]').click()
+    expect(page.locator("form[action$='/regions/trunk_anterior']")).to_be_visible()
+    page.get_by_label("Deep partial (%)").fill("50")
+    page.get_by_role("button", name="Save region").click()
+    expect(page.locator("#tbsa-figure .value")).to_have_text("6.5 %")
+    assert "mL/h" in page.inner_text("#fluid-figure .value")
+    page.locator('a[data-region="lower_arm_right_posterior"]').click()
+    expect(page.locator("form[action$='/regions/lower_arm_right_posterior']")).to_be_visible()
+    page.get_by_label("Superficial partial (%)").fill("40")
+    page.get_by_role("button", name="Save region").click()
+    expect(page.locator("#tbsa-figure .value")).to_have_text("7.1 %")
+    assert page.evaluate("window.__sameDocument") is True, "the chart reloaded the page instead of updating it"
+    shot(page, "04-burn-chart")
+
+    tab(page, "Pictures")
+    photos = sorted((phantom / "images").glob("*.jpg"))
+    page.set_input_files("#files", [str(p) for p in photos])
+    page.get_by_role("button", name="Upload").click()
+    expect(page.locator(".thumbs li")).to_have_count(len(photos), timeout=120_000)
+    poll(page, "Array.from(document.querySelectorAll('.thumbs img')).every(i => i.complete && i.naturalWidth > 0)")
+    assert "ready" in page.inner_text("#readiness")
+    shot(page, "05-pictures")
+
+    page.get_by_role("link", name="Request the 3D analysis").click()
+    page.get_by_role("button", name="Request the analysis").click()
+    page.wait_for_url(re.compile(r"/analyses/[0-9a-f-]+$"))
+    shot(page, "06-analysis-progress")
+    page.wait_for_selector("#result", timeout=ANALYSIS_TIMEOUT_MS)
+    assert "geometry, not burn depth" in page.inner_text("#metrics")
+    assert "cm²" in page.inner_text("#metrics")
+    shot(page, "07-analysis-result-loading")
+    # The viewer loads its model when it scrolls into view (a phone should not fetch it otherwise).
+    page.locator("model-viewer").scroll_into_view_if_needed()
+    try:
+        poll(page, "document.querySelector('model-viewer').loaded === true", timeout_s=90)
+    except AssertionError as exc:
+        raise AssertionError(f"{exc}; browser errors: {problems}") from None
+    page.wait_for_timeout(500)
+    viewer = page.locator("model-viewer")
+    viewer.scroll_into_view_if_needed()
+    viewer_png = tmp_path / "viewer.png"
+    viewer.screenshot(path=str(viewer_png))
+    assert distinct_colours(viewer_png) > 500, "the 3D viewer's canvas is blank"
+    shot(page, "07-analysis-result", readme="page-analysis-result.png")
+
+    page.get_by_role("link", name=re.compile("Healing track")).click()
+    page.wait_for_selector("#healing figure.plot svg")
+    assert "Area" in page.inner_text("#healing")
+    shot(page, "08-patient-healing")
+
+    page.goto(encounter_url)
+    pending = page.locator(".recommendation-list li:has(button:text('Accept'))")
+    assert pending.count() >= 2, "expected at least two recommendations to act on"
+    first_key = pending.nth(0).get_attribute("data-key")
+    pending.nth(0).get_by_role("button", name="Accept").click()
+    page.wait_for_load_state()
+    assert "accepted" in page.inner_text(f".recommendation-list li[data-key='{first_key}']")
+    second = page.locator(".recommendation-list li:has(button:text('Decline'))").nth(0)
+    second_key = second.get_attribute("data-key")
+    second.get_by_label("Reason for declining").fill("Already given in the ambulance")
+    second.get_by_role("button", name="Decline").click()
+    page.wait_for_load_state()
+    assert "Already given in the ambulance" in page.inner_text(f".recommendation-list li[data-key='{second_key}']")
+    shot(page, "09-encounter", readme="page-encounter.png")
+
+    tab(page, "Report")
+    with page.expect_download() as download:
+        page.get_by_role("link", name="Download").click()
+    pdf = tmp_path / "report.pdf"
+    download.value.save_as(pdf)
+    assert pdf.read_bytes()[:5] == b"%PDF-"
+    text = pdf_text(pdf)
+    assert "Diallo" in text and "7.1" in text
+
+    page.goto(encounter_url)
+    page.get_by_role("button", name="Send to the burn center").click()
+    page.wait_for_load_state()
+    for _ in range(120):
+        if page.locator("[data-transfer-state='delivered']").count():
+            break
+        page.wait_for_timeout(500)
+        page.reload()
+    assert page.locator("[data-transfer-state='delivered']").count() == 1
+    shot(page, "10-sent")
+
+    for width, height in (PHONE, TABLET):
+        page.set_viewport_size({"width": width, "height": height})
+        page.goto(encounter_url)
+        shot(page, f"11-encounter-{width}")
+    page.set_viewport_size({"width": DESKTOP[0], "height": DESKTOP[1]})
+    assert not problems, f"the browser reported errors: {problems}"
+    context.close()
