@@ -228,6 +228,9 @@ def run_demo(config: Config, options: SeriesOptions, password: str, *, keep_serv
                 f"The clinical report of the day-0 visit (all four visits, decision support): {report}"
                 f"  ({gateway.url}/api/v1/encounters/{DEMO_ENCOUNTER_ID}/report.pdf)",
                 "Decision support only: a clinician confirms every figure. Surface relief is geometry, not burn depth.",
+                "",
+                f"Open the patient's page in a browser (sign in as clinician, password {password}):",
+                f"  {gateway.url}/patients/{DEMO_PATIENT_ID}",
             ]
         )
         print(text, flush=True)

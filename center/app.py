@@ -26,11 +26,14 @@ from base.web.errors import EXCEPTION_HANDLERS
 from base.web.health import health
 from base.web.pages.api_docs import offline_openapi_plugins
 from base.web.pages.assets import static_files
+from base.web.pages.protection import csrf_protection, security_headers
+from base.web.pages.rendering import NAV_KEY, SITE_NAME_KEY, template_config
 from base.web.paths import IdPath, SiteIdPath
 from base.web.site import AuthedRequest
 from center.cases import CaseService
 from center.endpoint import Endpoint
 from center.files import PartStore
+from center.pages import NAV, SITE_NAME, TEMPLATES, page_controllers
 from center.receiver import Receiver
 from center.storage.migrations import central_migrations
 from schemas.accounts import Role
@@ -146,9 +149,18 @@ class SitesController(Controller):
 
 def create_central_app(config: Config, services: CentralServices) -> Litestar:
     return Litestar(
-        route_handlers=[health, AuthController, AdminController, CaseController, SitesController, static_files()],
+        route_handlers=[
+            health,
+            AuthController,
+            AdminController,
+            CaseController,
+            SitesController,
+            static_files(),
+            *page_controllers(),
+        ],
         dependencies={"services": Provide(lambda: services, sync_to_thread=False, use_cache=True)},
-        middleware=[session_auth],
+        middleware=[security_headers, csrf_protection, session_auth],
+        template_config=template_config([TEMPLATES]),
         exception_handlers=EXCEPTION_HANDLERS,
         openapi_config=OpenAPIConfig(
             title="burnedge burn center",
@@ -158,7 +170,7 @@ def create_central_app(config: Config, services: CentralServices) -> Litestar:
             description="Cases received from clinics and consultants' advice back. "
             "Decision support, never autonomous decisions.",
         ),
-        state=State({"services": services}),
+        state=State({"services": services, SITE_NAME_KEY: SITE_NAME, NAV_KEY: NAV}),
     )
 
 

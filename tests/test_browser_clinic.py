@@ -218,6 +218,43 @@ def test_the_clinicians_flow_end_to_end_and_the_consultants_advice_back(sites, b
     assert page.locator("[data-transfer-state='delivered']").count() == 1
     shot(page, "10-sent")
 
+    # The consultant at the burn center: the case, its report, advice written and delivered back.
+    center = browser.new_context(viewport={"width": DESKTOP[0], "height": DESKTOP[1]})
+    consultant = center.new_page()
+    consultant.on("pageerror", lambda e: problems.append(str(e)))
+    sign_in(consultant, sites.center.url, "consult")
+    expect(consultant.locator("h1")).to_have_text("Incoming cases")
+    shot(consultant, "12-center-cases")
+    consultant.get_by_role("link", name=re.compile("emergency")).first.click()
+    consultant.wait_for_load_state()
+    expect(consultant.locator("#tbsa-figure .value")).to_have_text("7.1 %")
+    assert "geometry, not burn depth" in consultant.inner_text("#metrics")
+    report_href = consultant.get_by_role("link", name=re.compile("report")).get_attribute("href")
+    report = center.request.get(sites.center.url + report_href)
+    assert report.ok and report.body()[:5] == b"%PDF-"
+    consultant.locator("model-viewer").scroll_into_view_if_needed()
+    poll(consultant, "document.querySelector('model-viewer').loaded === true", timeout_s=90)
+    shot(consultant, "13-center-case")
+    consultant.get_by_label("Recommendation").select_option("manage_locally")
+    consultant.get_by_role("textbox", name="Advice").fill(
+        "Manage locally: dress with silver sulfadiazine, review the wound in 48 h."
+    )
+    consultant.get_by_role("button", name="Send advice").click()
+    consultant.wait_for_load_state()
+    assert "Advice written" in consultant.inner_text("main")
+    for _ in range(120):
+        if consultant.locator("[data-note-state='delivered']").count():
+            break
+        consultant.wait_for_timeout(500)
+        consultant.reload()
+    assert consultant.locator("[data-note-state='delivered']").count() == 1
+    shot(consultant, "14-center-advice-delivered")
+
+    page.goto(encounter_url)
+    expect(page.locator("#burn-center .advice-text")).to_contain_text("review the wound in 48 h")
+    shot(page, "15-advice-at-the-clinic")
+    center.close()
+
     for width, height in (PHONE, TABLET):
         page.set_viewport_size({"width": width, "height": height})
         page.goto(encounter_url)

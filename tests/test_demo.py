@@ -5,10 +5,12 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+import time
 
 import pytest
 
-from harness.processes import FAST_HASH_ENV, REPO, free_port
+from harness.browser import browser_missing, launch, shot
+from harness.processes import FAST_HASH_ENV, REPO, GatewayProcess, free_port
 from harness.report_pages import inked_share, page_texts, rasterise
 from processing.report.figures import figure
 
@@ -55,9 +57,46 @@ def test_the_demo_uploads_analyses_and_aligns_four_visits_then_exits(tmp_path):
         assert session["area_change_percent"] == pytest.approx(true_change, abs=3.0), session
     assert track["healing_rate_cm2_per_day"] > 0
     _check_report(out, track, tmp_path)
+    _check_patient_page(out, db)
     again = subprocess.run(args, capture_output=True, text=True, cwd=REPO, env=env, timeout=300)
     assert again.returncode == 0, again.stderr[-4000:]  # a second run reuses the series, visits and analyses
     assert "Healing trend:" in again.stdout
+
+
+def _check_patient_page(out: str, db) -> None:
+    """The page the demo ends on, opened as a newcomer would: four visits, the 3D burn and the healing plots."""
+    lines = out.splitlines()
+    at = next(i for i, line in enumerate(lines) if line.startswith("Open the patient's page"))
+    password = lines[at].rsplit("password ", 1)[1].rstrip("):")
+    path = "/" + lines[at + 1].strip().split("/", 3)[3]
+    assert path.startswith("/patients/")
+    if browser_missing():
+        return
+    from playwright.sync_api import sync_playwright
+
+    gateway = GatewayProcess(db, free_port())
+    gateway.env["BURNEDGE_JOBS_WORKERS"] = "0"
+    gateway.start(timeout=60)
+    try:
+        with sync_playwright() as playwright:
+            browser = launch(playwright)
+            page = browser.new_page(viewport={"width": 1280, "height": 900})
+            page.goto(gateway.url + path)
+            page.get_by_label("Username").fill("clinician")
+            page.get_by_label("Password").fill(password)
+            page.get_by_role("button", name="Sign in").click()
+            page.wait_for_url(gateway.url + path)
+            assert page.locator("section[aria-labelledby=encounters-heading] tbody tr").count() == 4
+            assert page.locator("#healing figure.plot svg").count() >= 3
+            page.locator("model-viewer").scroll_into_view_if_needed()
+            deadline = time.monotonic() + 90
+            while not page.evaluate("document.querySelector('model-viewer').loaded === true"):
+                assert time.monotonic() < deadline, "the demo's 3D burn did not load"
+                page.wait_for_timeout(250)
+            shot(page, "demo-patient", readme="page-patient.png")
+            browser.close()
+    finally:
+        gateway.stop()
 
 
 def _check_report(out: str, track: dict, tmp_path) -> None:

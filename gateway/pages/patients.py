@@ -15,6 +15,7 @@ from base.web.pages.rendering import page, svg
 from base.web.paths import IdPath
 from base.web.site import AuthedRequest
 from gateway.dependencies import ServicesDep
+from gateway.pages.analyses import PAINTED_SURFACE
 from gateway.pages.common import FormBody, parse_or_errors, posted_id
 from processing.views.healing_plot_svg import healing_plots_svg
 from schemas.accounts import Role
@@ -86,6 +87,8 @@ class PatientPages(Controller):
             plots = [(title, svg(markup)) for title, markup in healing_plots_svg(track)]
         except NotFound:
             track, plots = None, []
+        measured = [s for s in track.sessions if s.status == "ok" and s.analysis] if track else []
+        latest = measured[-1] if measured else None
         return page(
             request,
             "patient.html",
@@ -94,6 +97,8 @@ class PatientPages(Controller):
             encounters=encounters,
             track=track,
             plots=plots,
+            latest=latest,
+            latest_surface=f"{latest.analysis}/artifacts/{PAINTED_SURFACE}" if latest else None,
         )
 
     @get("/patients/{patient_id:str}/encounters/new", sync_to_thread=False)

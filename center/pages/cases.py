@@ -1,0 +1,92 @@
+"""The consultant's pages: the incoming cases by urgency, one case, and the advice written back."""
+
+from __future__ import annotations
+
+import datetime as dt
+from typing import Annotated, Any
+
+from litestar import Controller, get, post
+from litestar.enums import RequestEncodingType
+from litestar.params import Body, Dependency, QueryParameter
+from litestar.response import Redirect, Template
+
+from base.web.pages.forms import FormInvalid, field_errors, form_fields, parse_form
+from base.web.pages.rendering import page
+from base.web.paths import IdPath, SiteIdPath
+from base.web.site import AuthedRequest
+from center.pages.case_view import case_view
+from schemas.accounts import Role
+from schemas.central import NoteRequest
+
+CentralServicesDep = Annotated[Any, Dependency(skip_validation=True)]
+FormBody = Annotated[dict[str, Any], Body(media_type=RequestEncodingType.URL_ENCODED)]
+Superseded = Annotated[bool, QueryParameter(description="Also list versions a newer one replaced")]
+
+
+def age(stored_at: str) -> str:
+    """'25 min ago', '3 h ago', '2 days ago': how long the case has waited."""
+    try:
+        then = dt.datetime.fromisoformat(stored_at)
+    except ValueError:
+        return stored_at
+    minutes = max(0, int((dt.datetime.now(dt.UTC) - then).total_seconds() // 60))
+    if minutes < 60:
+        return f"{minutes} min ago"
+    if minutes < 48 * 60:
+        return f"{minutes // 60} h ago"
+    return f"{minutes // 1440} days ago"
+
+
+class CasePages(Controller):
+    path = "/"
+    include_in_schema = False
+
+    @get("/", sync_to_thread=False)
+    def start(self, request: AuthedRequest) -> Redirect:
+        return Redirect(path="/admin" if request.user.role == Role.admin else "/cases", status_code=303)
+
+    @get("/cases", sync_to_thread=False)
+    def cases(
+        self, request: AuthedRequest, services: CentralServicesDep, include_superseded: Superseded = False
+    ) -> Template:
+        items = services.cases.list_cases(request.user, include_superseded=include_superseded)
+        return page(request, "cases.html", cases=items, include_superseded=include_superseded, age=age)
+
+    @get("/cases/{site_id:str}/{bundle_id:str}", sync_to_thread=True)
+    def case(
+        self, site_id: SiteIdPath, bundle_id: IdPath, request: AuthedRequest, services: CentralServicesDep
+    ) -> Template:
+        return self._case(request, services, site_id, bundle_id, form_fields(NoteRequest), {}, 200)
+
+    def _case(self, request, services, site_id, bundle_id, fields, errors, status):
+        view = case_view(services, request.user, site_id, bundle_id)
+        return page(
+            request,
+            "case.html",
+            status,
+            view=view,
+            fields=fields,
+            errors=errors,
+            age=age,
+            parts=f"/api/v1/cases/{site_id}/{bundle_id}/parts/",
+            written=request.query_params.get("written") == "1",
+        )
+
+    @post("/cases/{site_id:str}/{bundle_id:str}/notes", sync_to_thread=True, status_code=303)
+    def write_note(
+        self,
+        site_id: SiteIdPath,
+        bundle_id: IdPath,
+        request: AuthedRequest,
+        data: FormBody,
+        services: CentralServicesDep,
+    ) -> Template | Redirect:
+        try:
+            body = parse_form(NoteRequest, data, fixed={})
+        except FormInvalid as exc:
+            errors = field_errors(exc.errors)
+            return self._case(
+                request, services, site_id, bundle_id, form_fields(NoteRequest, raw=data, errors=errors), errors, 422
+            )
+        services.cases.write_note(request.user, site_id, bundle_id, body)
+        return Redirect(path=f"/cases/{site_id}/{bundle_id}", query_params={"written": "1"}, status_code=303)
