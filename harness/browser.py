@@ -1,12 +1,11 @@
 """A real browser for the page tests: Playwright for Python driving Debian's Chromium (Playwright's own browser
 download cannot reach the internet), headless, with software WebGL so the 3D viewer renders without a GPU.
 Screenshots go to test-artifacts/browser/ (or $BURNEDGE_TEST_ARTIFACTS); with BURNEDGE_UPDATE_SCREENSHOTS=1 the
-ones the README shows are copied to docs/images/ as well."""
+ones the README shows are saved to docs/images/ as well (the first screenful)."""
 
 from __future__ import annotations
 
 import os
-import shutil
 from pathlib import Path
 
 import cv2
@@ -50,8 +49,9 @@ def shot(page, name: str, *, full_page: bool = True, readme: str | None = None) 
     path = ARTIFACTS / f"{name}.png"
     page.screenshot(path=str(path), full_page=full_page)
     if readme and os.environ.get("BURNEDGE_UPDATE_SCREENSHOTS") == "1":
+        # What a person sees on opening the page: the first screenful, not the whole scroll.
         README_IMAGES.mkdir(parents=True, exist_ok=True)
-        shutil.copyfile(path, README_IMAGES / readme)
+        page.screenshot(path=str(README_IMAGES / readme), full_page=False)
     return path
 
 

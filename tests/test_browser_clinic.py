@@ -138,7 +138,7 @@ def test_the_clinicians_flow_end_to_end_and_the_consultants_advice_back(sites, b
     page.get_by_label("Deep partial (%)").fill("50")
     page.get_by_role("button", name="Save region").click()
     expect(page.locator("#tbsa-figure .value")).to_have_text("6.5 %")
-    assert "mL/h" in page.inner_text("#fluid-figure .value")
+    assert "mL/h" in page.inner_text("#fluid-figure")
     page.locator('a[data-region="lower_arm_right_posterior"]').click()
     expect(page.locator("form[action$='/regions/lower_arm_right_posterior']")).to_be_visible()
     page.get_by_label("Superficial partial (%)").fill("40")
@@ -261,4 +261,54 @@ def test_the_clinicians_flow_end_to_end_and_the_consultants_advice_back(sites, b
         shot(page, f"11-encounter-{width}")
     page.set_viewport_size({"width": DESKTOP[0], "height": DESKTOP[1]})
     assert not problems, f"the browser reported errors: {problems}"
+    context.close()
+
+
+def test_markup_is_text_forged_writes_are_refused_and_roles_see_what_they_may_do(sites, browser):
+    from harness.processes import add_user_cli
+
+    add_user_cli(sites.gateway.db, "nina", "nurse")
+    context = browser.new_context(viewport={"width": TABLET[0], "height": TABLET[1]})
+    page = context.new_page()
+    dialogs: list[str] = []
+    page.on("dialog", lambda d: (dialogs.append(d.message), d.dismiss()))
+    clinic = sites.gateway.url
+
+    sign_in(page, clinic, "nina")
+    page.get_by_role("link", name="New patient").click()
+    page.get_by_label("Given name").fill("<script>alert(1)</script>")
+    page.get_by_label("Family name").fill('<img src=x onerror="alert(2)">')
+    page.get_by_role("button", name="Create patient").click()
+    page.wait_for_url(re.compile(r"/patients/[0-9a-f-]+$"))
+    assert "<script>alert(1)</script>" in page.inner_text("h1")
+    page.goto(clinic + "/patients?q=script")
+    assert "<script>alert(1)</script>" in page.inner_text("table")
+    shot(page, "20-markup-as-text")
+
+    # A write without the page's token (what a forged cross-site form amounts to) is refused and stores nothing.
+    status = page.evaluate(
+        "fetch('/patients/new', {method: 'POST', headers: {'Content-Type': 'application/x-www-form-urlencoded'},"
+        " body: 'id=0190c0de-0000-7000-8000-000000000042&given_name=Forged'}).then(r => r.status)"
+    )
+    assert status == 403
+    page.goto(clinic + "/patients?q=Forged")
+    assert "No patient matches" in page.inner_text("main section.panel")
+
+    # A nurse reads the chart but does not chart (a clinician's assessment), and acts on no recommendation.
+    page.goto(clinic + "/patients?q=script")
+    page.locator("table a").first.click()
+    page.get_by_role("link", name="New encounter").click()
+    page.get_by_role("button", name="Open encounter").click()
+    page.wait_for_url(re.compile(r"/encounters/[0-9a-f-]+$"))
+    tab(page, "Burn chart")
+    page.locator('a[data-region="trunk_anterior"]').click()
+    expect(page.locator("#chart-area")).to_contain_text("a clinician charts the burn")
+    assert page.locator("form.region-editor").count() == 0
+    page.goto(page.url.split("/burn-chart")[0])
+    assert page.get_by_role("button", name="Accept").count() == 0
+    assert page.get_by_role("button", name="Send to the burn center").count() == 0
+    page.goto(clinic + "/admin")
+    assert "Not allowed" in page.inner_text("main") or "403" in page.inner_text("main")
+    shot(page, "21-nurse-admin-refused")
+    assert not dialogs, f"a script ran: {dialogs}"
     context.close()

@@ -44,6 +44,19 @@ def local_time(value: dt.datetime | None, with_date: bool = True) -> str:
     return local.strftime("%Y-%m-%d %H:%M" if with_date else "%H:%M")
 
 
+def when(value: str | dt.datetime | None) -> str:
+    """A stored ISO time (text or datetime) in the machine's zone, to the minute, with the zone named."""
+    if not value:
+        return "—"
+    try:
+        moment = value if isinstance(value, dt.datetime) else dt.datetime.fromisoformat(value)
+    except ValueError:
+        return str(value)
+    if moment.tzinfo is None:
+        return moment.strftime("%Y-%m-%d %H:%M")
+    return moment.astimezone().strftime("%Y-%m-%d %H:%M %Z").strip()
+
+
 def number(value: float | None, digits: int = 1, unit: str = "") -> str:
     if value is None:
         return "—"
@@ -61,6 +74,7 @@ def environment(directories: Sequence[Path]) -> Environment:
     )
     env.filters["local_time"] = local_time
     env.filters["number"] = number
+    env.filters["when"] = when
     env.globals["version"] = __version__
     env.globals["errors_in"] = errors_in
     return env
