@@ -14,7 +14,7 @@ import pytest
 
 from harness.browser import DESKTOP, PHONE, TABLET, browser_missing, distinct_colours, launch, shot
 from harness.processes import PASSWORD
-from harness.sites import Sites
+from harness.sites import Sites, cli
 
 pytestmark = pytest.mark.skipif(bool(browser_missing()), reason=browser_missing() or "browser present")
 
@@ -249,6 +249,29 @@ def test_the_clinicians_flow_end_to_end_and_the_consultants_advice_back(sites, b
         consultant.reload()
     assert consultant.locator("[data-note-state='delivered']").count() == 1
     shot(consultant, "14-center-advice-delivered")
+
+    # The center's administrator runs the box but reads no case: the case page answers as the API does.
+    case_url = consultant.url.split("?")[0]
+    cli(
+        "users",
+        "add",
+        "--center",
+        "--username",
+        "it",
+        "--role",
+        "admin",
+        "--password-stdin",
+        env=sites.center.env,
+        stdin=PASSWORD + "\n",
+    )
+    admin = browser.new_context()
+    admin_page = admin.new_page()
+    sign_in(admin_page, sites.center.url, "it")
+    assert admin_page.url.endswith("/admin")
+    refused = admin_page.goto(case_url)
+    assert refused.status == 403 and "Not allowed" in admin_page.inner_text("main")
+    assert admin.request.get(case_url.replace("/cases/", "/api/v1/cases/")).status == 403
+    admin.close()
 
     page.goto(encounter_url)
     expect(page.locator("#burn-center .advice-text")).to_contain_text("review the wound in 48 h")

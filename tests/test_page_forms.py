@@ -21,6 +21,13 @@ from schemas.record_parts import Intake, Mechanism, PrimarySurvey, Resuscitation
 from tests.page_forms_helpers import EAT, EID, IDS, PID, RECORDS, T0, Browser, edited, fixed_ids, flat, post, render
 
 
+def form_errors(struct_type: type, raw, *, fixed: dict) -> dict[str, str]:
+    """The messages by input name of a form that must not parse (it fails the test if it does)."""
+    with pytest.raises(FormInvalid) as caught:
+        parse_form(struct_type, raw, fixed=fixed)
+    return field_errors(caught.value.errors)
+
+
 @pytest.mark.parametrize("tz", [None, EAT, zoneinfo.ZoneInfo("America/New_York")], ids=["local", "eat", "ny"])
 @pytest.mark.parametrize("key", RECORDS)
 def test_a_record_posted_back_unchanged_is_the_same_record(key, tz):
@@ -52,9 +59,9 @@ def test_new_forms_posted_as_shown_keep_the_defaults_and_drop_blank_rows():
         fields = form_fields(struct_type, skip=IDS)
         fixed = {"encounter_id": EID} | ({"assessed_at": T0} if struct_type in (SecondarySurvey, BurnChart) else {})
         assert parse_form(struct_type, post(fields), fixed=fixed) == struct_type(**fixed)
-    with pytest.raises(FormInvalid) as caught:
-        parse_form(Mechanism, post(form_fields(Mechanism, skip=IDS)), fixed={"encounter_id": EID})
-    assert field_errors(caught.value.errors) == {"type": "is required"}
+    assert form_errors(Mechanism, post(form_fields(Mechanism, skip=IDS)), fixed={"encounter_id": EID}) == {
+        "type": "is required"
+    }
 
 
 def test_fields_carry_the_schema_limits_labels_and_help():
@@ -102,9 +109,7 @@ def test_bad_input_names_every_bad_field_and_nothing_is_built():
         assessed_at="yesterday",
         airway__intervention="prayer",
     )
-    with pytest.raises(FormInvalid) as caught:
-        parse_form(PrimarySurvey, bad, fixed={"encounter_id": EID})
-    assert field_errors(caught.value.errors) == {
+    assert form_errors(PrimarySurvey, bad, fixed={"encounter_id": EID}) == {
         "breathing.spo2_percent": "must be at most 100",
         "breathing.respiratory_rate_per_min": "enter a number",
         "disability.gcs_eye": "must be at least 1",
@@ -113,17 +118,13 @@ def test_bad_input_names_every_bad_field_and_nothing_is_built():
         "airway.intervention": "choose one of the options",
     }
     patient = edited(post(form_fields(Patient, skip=IDS)), weight_kg="abc", height_cm="300", date_of_birth="3/12/26")
-    with pytest.raises(FormInvalid) as caught:
-        parse_form(Patient, patient, fixed={"id": PID})
-    assert field_errors(caught.value.errors) == {
+    assert form_errors(Patient, patient, fixed={"id": PID}) == {
         "weight_kg": "enter a number",
         "height_cm": "must be at most 272",
         "date_of_birth": "must be a date like 2026-12-03",
     }
     mechanism = edited(post(form_fields(Mechanism, skip=IDS)), description="x" * 20_001, duration_s="-1")
-    with pytest.raises(FormInvalid) as caught:
-        parse_form(Mechanism, mechanism, fixed={"encounter_id": EID})
-    assert field_errors(caught.value.errors) == {
+    assert form_errors(Mechanism, mechanism, fixed={"encounter_id": EID}) == {
         "type": "is required",
         "description": "at most 20000 characters (this has 20001)",
         "duration_s": "must be at least 0",
@@ -133,9 +134,7 @@ def test_bad_input_names_every_bad_field_and_nothing_is_built():
 def test_the_form_comes_back_with_what_was_typed_and_the_messages():
     raw = {"medications[0].name": [""], "medications[1].dose": ["5 mg"], "medications[2].name": ["aspirin"]}
     raw |= {"past_medical_history": ["<script>alert(1)</script>"], "years_since_last_tetanus_dose": ["lots"]}
-    with pytest.raises(FormInvalid) as caught:
-        parse_form(Intake, raw, fixed={"encounter_id": EID})
-    errors = field_errors(caught.value.errors)
+    errors = form_errors(Intake, raw, fixed={"encounter_id": EID})
     assert errors == {"medications[0].name": "is required", "years_since_last_tetanus_dose": "enter a number"}
     fields = form_fields(Intake, raw=raw, errors=errors, skip=IDS, blank_rows=1)
     by_name = {f.name: f for f in flat(fields)}
@@ -170,9 +169,7 @@ def test_service_errors_in_json_paths_land_on_their_inputs():
 
 
 def test_what_msgspec_alone_catches_is_named_too():
-    with pytest.raises(FormInvalid) as caught:
-        parse_form(Patient, {}, fixed={"id": "not-an-id"})
-    assert field_errors(caught.value.errors) == {"id": "is not in the expected form"}
+    assert form_errors(Patient, {}, fixed={"id": "not-an-id"}) == {"id": "is not in the expected form"}
 
 
 def test_markup_typed_into_a_field_is_shown_as_text_and_stored_as_typed():
@@ -190,9 +187,7 @@ def test_the_page_hidden_inputs_are_ignored_and_other_unknown_inputs_named():
     sent = edited(pairs, csrf_token="abc123", version="3", encounter_id="not-read")
     assert parse_form(Mechanism, sent, fixed=fixed_ids(record)) == record
     typo = edited(pairs, agnet="kettle", **{"entries[0].region": "head_anterior", "breathing.spo2_percent": "90"})
-    with pytest.raises(FormInvalid) as caught:
-        parse_form(Mechanism, edited(typo, duration_s="soon"), fixed=fixed_ids(record))
-    assert field_errors(caught.value.errors) == {
+    assert form_errors(Mechanism, edited(typo, duration_s="soon"), fixed=fixed_ids(record)) == {
         "agnet": "unknown field",
         "entries[0].region": "unknown field",
         "breathing.spo2_percent": "unknown field",
@@ -210,14 +205,15 @@ def test_a_burn_chart_row_names_its_bad_inputs_and_blank_rows_are_dropped():
     assert row["entries[0].region"].kind == "select" and row["entries[0].circumferential"].kind == "checkbox"
     typed = {"entries[1].fraction": "1.5", "entries[2].depth": "", "entries[3].region": "neck_anterior"}
     bad = edited(post(fields), **typed)
-    with pytest.raises(FormInvalid) as caught:
-        parse_form(BurnChart, bad, fixed={"encounter_id": EID})
-    assert field_errors(caught.value.errors) == {
+    assert form_errors(BurnChart, bad, fixed={"encounter_id": EID}) == {
         "entries[1].fraction": "must be at most 1",
         "entries[2].depth": "is required",
         "entries[3].fraction": "is required",
         "entries[3].depth": "is required",
     }
-    shown = {f.name: f for f in flat(form_fields(BurnChart, raw=bad, errors=field_errors(caught.value.errors)))}
+    shown = {
+        f.name: f
+        for f in flat(form_fields(BurnChart, raw=bad, errors=form_errors(BurnChart, bad, fixed={"encounter_id": EID})))
+    }
     assert shown["entries[1].fraction"].value == "1.5" and shown["entries[3].region"].value == "neck_anterior"
     assert shown["entries[2].depth"].error == "is required"
