@@ -324,7 +324,9 @@ def test_markup_is_text_forged_writes_are_refused_and_roles_see_what_they_may_do
     page.get_by_role("button", name="Open encounter").click()
     page.wait_for_url(re.compile(r"/encounters/[0-9a-f-]+$"))
     tab(page, "Burn chart")
-    page.locator('a[data-region="trunk_anterior"]').click()
+    # With the keyboard: a region is a link; Enter opens it.
+    page.locator('a[data-region="trunk_anterior"]').focus()
+    page.keyboard.press("Enter")
     expect(page.locator("#chart-area")).to_contain_text("a clinician charts the burn")
     assert page.locator("form.region-editor").count() == 0
     page.goto(page.url.split("/burn-chart")[0])

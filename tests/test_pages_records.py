@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import pytest
 
+from harness.processes import PASSWORD
 from schemas.accounts import Role
 from schemas.records import RecordKind
 from tests.conftest import make_user
@@ -175,3 +176,26 @@ def test_a_record_the_role_may_not_read_gets_the_apis_answer(client, services):
     page = client.get(f"/encounters/{encounter_id}")
     assert page.status_code == api.status_code
     assert client.get("/encounters/0190c0de-0000-7000-8000-00000000dead").status_code in (403, 404)
+
+
+def test_repeated_failed_sign_ins_are_slowed_as_the_apis_logins_are(client, services):
+    make_user(services, "nina", Role.nurse)
+    token = csrf_from(client.get("/sign-in").text)
+    statuses = [
+        client.post(
+            "/sign-in", data={"csrf_token": token, "username": "nina", "password": "wrong password!"}
+        ).status_code
+        for _ in range(services.config.security.login_free_failures + 1)
+    ]
+    assert statuses == [401] * len(statuses)  # the last of these failures starts the delay
+    # Even the right password waits out the delay: the form says so rather than signing in.
+    r = client.post("/sign-in", data={"csrf_token": token, "username": "nina", "password": PASSWORD})
+    assert r.status_code == 429 and "wait" in r.text and "Sign out" not in r.text
+
+
+def test_signing_out_ends_the_session_for_the_cookie_too(nurse, services):
+    cookie = nurse.cookies["burnedge_session"]
+    nurse.post("/sign-out", data={"csrf_token": csrf_from(nurse.get("/patients").text)})
+    nurse.cookies.set("burnedge_session", cookie)
+    r = nurse.get("/patients", follow_redirects=False)
+    assert r.status_code == 303 and r.headers["location"].startswith("/sign-in")
