@@ -159,6 +159,14 @@ def test_the_clinicians_flow_end_to_end_and_the_consultants_advice_back(sites, b
     page.get_by_role("link", name="Request the 3D analysis").click()
     page.get_by_role("button", name="Request the analysis").click()
     page.wait_for_url(re.compile(r"/analyses/[0-9a-f-]+$"))
+    # Progress arrives live over server-sent events, in the same document (no reload until the end).
+    page.evaluate("window.__live = true")
+    poll(
+        page,
+        "window.__live === true && !!document.querySelector('#job-progress')"
+        " && document.querySelector('#job-progress').value > 0",
+        timeout_s=180,
+    )
     shot(page, "06-analysis-progress")
     page.wait_for_selector("#result", timeout=ANALYSIS_TIMEOUT_MS)
     assert "geometry, not burn depth" in page.inner_text("#metrics")

@@ -1,0 +1,254 @@
+"""The burn center's pages for consultants over the real center app (TestClient): the case list, the case page with
+the clinic's record, 3D viewer, photos and report, advice written through the form and followed to its delivery,
+roles, CSRF and escaping.
+
+The case is real: a clinic gateway (in this process, its API through a TestClient) records a patient, an encounter
+with a burn chart and a photo, and sends it with its own sync round over Zenoh on loopback to the center's own
+endpoint, also in this process. The 3D analysis is stored the way the gateway's job runner stores a finished one
+(its record and files), not reconstructed: a reconstruction takes minutes; tests/test_browser_clinic.py runs one.
+"""
+
+from __future__ import annotations
+
+import re
+
+import msgspec
+import pytest
+import trimesh
+from litestar.testing import TestClient
+
+from base import folders
+from base.storage import audit
+from burnedge.demo_client import GatewayClient
+from center.app import CentralServices, create_central_app, open_center_db
+from center.endpoint import Endpoint
+from gateway.app import create_app
+from harness.bodies import encounter_body, now, patient_body
+from harness.processes import PASSWORD, free_port
+from harness.sites import noise_photo
+from schemas.accounts import Role, UserCreate
+from schemas.analysis import AnalysisResult, AnalysisStatus, BurnMetrics, ConfidenceRecord, ScaleSummary
+from schemas.config import CentralConfig, Config, GatewayConfig, SyncConfig
+from schemas.ids import uuid7
+from schemas.jobs import BurnAnalysis
+from schemas.records import RecordKind
+from schemas.transfer import SiteRole
+from sync import peers
+from sync.keys import init_keys
+from tests.conftest import FAST_SECURITY
+from tests.pages_helpers import post_form, sign_in
+
+NAME = "<script>alert(1)</script>"
+SURFACE = "surface/burn_surface.glb"
+
+
+class Pair:
+    """The clinic and the center of one test module, the center's endpoint listening."""
+
+    def __init__(self, clinic, center: CentralServices, center_config: Config, bundle_id: str, job_id: str):
+        self.clinic, self.center, self.center_config = clinic, center, center_config
+        self.bundle_id, self.job_id = bundle_id, job_id
+        self.case_url = f"/cases/clinic-test/{bundle_id}"
+        self.parts_url = f"/api/v1/cases/clinic-test/{bundle_id}/parts/"
+
+    def sync_round(self) -> None:
+        report = self.clinic.transfers.sync.run_round(force=True)
+        assert report is not None and not report.rejected, report
+
+    def note_count(self) -> int:
+        return self.center.db.connection().execute("SELECT COUNT(*) FROM notes").fetchone()[0]
+
+
+def _store_analysis(clinic, config: Config, encounter_id: str, photo_ids: list[str]) -> str:
+    """A finished analysis as gateway/jobs/runner.py stores it: the burn_analysis record and its files."""
+    job_id = uuid7()
+    result = AnalysisResult(
+        status=AnalysisStatus.ok,
+        metrics=BurnMetrics(area_cm2=18.4, perimeter_cm=17.2, relief_max_mm=1.6, volume_cm3=0.42, burn_loops=1),
+        confidence=ConfidenceRecord(score=0.86, level="high", views_used=8, views_seeing_burn=8),
+        scale=ScaleSummary(method="marker", mm_per_unit=1.0, uncertainty_percent=1.5),
+        hours_since_injury=3.0,
+        provisional=True,
+    )
+    record = BurnAnalysis(
+        encounter_id=encounter_id,
+        job_id=job_id,
+        assets=photo_ids,
+        requested_by="clin",
+        requested_at=now().isoformat(),
+        completed_at=now().isoformat(),
+        result=result,
+    )
+    folder = folders.analysis_dir(config, job_id)
+    (folder / "surface").mkdir(parents=True)
+    (folder / SURFACE).write_bytes(trimesh.creation.box().export(file_type="glb"))
+    (folder / "analysis.json").write_bytes(msgspec.json.encode(result))
+    with clinic.db.write() as conn:
+        audit.insert_server_record(
+            conn,
+            kind=RecordKind.burn_analysis,
+            record_id=job_id,
+            parent_id=encounter_id,
+            data=msgspec.json.encode(record),
+            action="analysis.store",
+        )
+    return job_id
+
+
+def _record_case(api: GatewayClient, clinic, config: Config, folder) -> tuple[str, str]:
+    patient = api.post("/api/v1/patients", patient_body(given_name=NAME), "patient")
+    encounter_id = api.post("/api/v1/encounters", encounter_body(patient["meta"]["id"]), "encounter")["meta"]["id"]
+    chart = {
+        "encounter_id": encounter_id,
+        "assessed_at": now().isoformat(),
+        "entries": [
+            {"region": "trunk_anterior", "fraction": 1.0, "depth": "deep_partial"},
+            {"region": "thigh_right_anterior", "fraction": 1.0, "depth": "full_thickness"},
+        ],
+    }
+    r = api.http.put(f"/api/v1/encounters/{encounter_id}/burn-chart", json=chart, headers={"If-None-Match": "*"})
+    assert r.status_code == 201, r.text
+    photo = api.upload(noise_photo(folder / "photo.jpg", 1, size=(640, 480)), encounter_id)
+    job_id = _store_analysis(clinic, config, encounter_id, [photo["asset"]["id"]])
+    sent = api.http.post(f"/api/v1/encounters/{encounter_id}/transfers")
+    assert sent.status_code == 202, sent.text
+    return sent.json()["bundle_id"], job_id
+
+
+@pytest.fixture(scope="module")
+def pair(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("pair")
+    port = free_port()
+    sync = SyncConfig(center_endpoints=[f"tcp/127.0.0.1:{port}"], connect_timeout_s=5, query_timeout_s=20)
+    clinic_config = Config(
+        gateway=GatewayConfig(database=str(folder / "clinic.sqlite3")), security=FAST_SECURITY, sync=sync
+    )
+    center_config = Config(
+        central=CentralConfig(database=str(folder / "center.sqlite3"), listen_endpoints=[f"tcp/127.0.0.1:{port}"]),
+        security=FAST_SECURITY,
+    )
+    clinic_keys = init_keys(folders.keys_dir(clinic_config), "clinic-test", SiteRole.clinic, "Test field clinic")
+    center_keys = init_keys(
+        folders.center_keys_dir(center_config.central), "center-test", SiteRole.center, "Test burn center"
+    )
+    center_db = open_center_db(center_config.central)
+    center = CentralServices.build(center_config, center_db)
+    peers.enrol(center_db, clinic_keys.identity, by="it-person")
+    for username, role, display in (("consult", Role.consultant, "Dr Consultant"), ("it", Role.admin, "")):
+        center.accounts.create_user(
+            None, UserCreate(username=username, password=PASSWORD, role=role, display_name=display)
+        )
+    gateway_app = create_app(clinic_config)
+    clinic = gateway_app.state.services
+    peers.enrol(clinic.db, center_keys.identity, by="it-person")
+    clinic.accounts.create_user(None, UserCreate(username="clin", password=PASSWORD, role=Role.clinician))
+    try:
+        with TestClient(gateway_app) as http, Endpoint(center_db, center_config.central, center.receiver):
+            api = GatewayClient(http=http)
+            api.login("clin", PASSWORD)
+            bundle_id, job_id = _record_case(api, clinic, clinic_config, folder)
+            pair = Pair(clinic, center, center_config, bundle_id, job_id)
+            pair.sync_round()
+            yield pair
+    finally:
+        center_db.close()
+
+
+@pytest.fixture
+def consultant(pair):
+    with TestClient(create_central_app(pair.center_config, pair.center)) as client:
+        sign_in(client, "consult", next="/cases")
+        yield client
+
+
+def test_the_case_list_shows_the_received_case_by_urgency_with_its_clinic_and_age(pair, consultant):
+    assert consultant.get("/", follow_redirects=False).headers["location"] == "/cases"
+    page = consultant.get("/cases")
+    assert page.status_code == 200
+    assert f'href="{pair.case_url}"' in page.text
+    assert "Test field clinic" in page.text and "min ago" in page.text
+    assert "badge-urgent" in page.text and ">immediate<" in page.text  # full thickness: an immediate referral
+    assert "17.8 %" in page.text and "18.4 cm²" in page.text  # %TBSA 13 + 4.75, and the 3D area
+    assert 'href="/cases?include_superseded=true"' in page.text
+    assert "Latest versions only" in consultant.get("/cases?include_superseded=true").text
+
+
+def test_the_case_page_shows_the_record_the_viewer_photos_report_and_versions(pair, consultant):
+    page = consultant.get(pair.case_url)
+    assert page.status_code == 200
+    html = page.text
+    assert "Test field clinic" in html and "70.0 kg" in html and "Dr. Test" in html
+    assert "17.8 %" in html and "Oral / maintenance" in html  # the clinic's %TBSA and fluids (below 20 %)
+    assert "3 criteria met" in html and "Thermal: full-thickness burns (any size)" in html
+    glb = f"{pair.parts_url}analyses/{pair.job_id}/{SURFACE}"
+    assert re.search(rf'<model-viewer id="surface-viewer" src="{re.escape(glb)}"', html)
+    assert '<script type="module" src="/static/vendor/model-viewer/model-viewer.min.js">' in html
+    assert consultant.get(glb).content.startswith(b"glTF")  # the part URL works with the page's cookie
+    assert "18.4 cm²" in html and "17.2 cm" in html and "1.6 mm" in html and "geometry, not burn depth" in html
+    assert "marker (± 1.5 %)" in html and "high (0.86)" in html
+    photo = re.search(rf'<img src="({re.escape(pair.parts_url)}photos/[^"]+)"', html)
+    assert photo and consultant.get(photo.group(1)).headers["content-type"] == "image/jpeg"
+    report = re.search(rf'href="({re.escape(pair.parts_url)}report\.pdf)"', html)
+    assert report and consultant.get(report.group(1)).content.startswith(b"%PDF")
+    assert "<strong>Version 1</strong> (this one)" in html
+
+
+def test_a_patient_name_with_markup_is_shown_as_text(pair, consultant):
+    html = consultant.get(pair.case_url).text
+    assert NAME not in html
+    assert "&lt;script&gt;alert(1)&lt;/script&gt;" in html
+
+
+def test_advice_written_through_the_form_is_listed_and_followed_to_its_delivery(pair, consultant):
+    before = pair.note_count()
+    r = post_form(
+        consultant,
+        f"{pair.case_url}/notes",
+        {"recommendation": "transfer", "advice": "Transfer today; keep the patient warm."},
+        from_page=pair.case_url,
+    )
+    assert r.status_code == 303 and r.headers["location"] == f"{pair.case_url}?written=1"
+    page = consultant.get(r.headers["location"]).text
+    assert "Advice written" in page and "Transfer today; keep the patient warm." in page
+    assert 'data-note-state="queued"' in page and "Dr Consultant" in page
+    assert pair.note_count() == before + 1
+    pair.sync_round()  # the clinic fetches the note
+    pair.sync_round()  # and says it stored it
+    assert 'data-note-state="delivered"' in consultant.get(pair.case_url).text
+    assert ">written<" in consultant.get("/cases").text
+
+
+def test_invalid_advice_shows_the_form_again_with_errors_and_stores_nothing(pair, consultant):
+    before = pair.note_count()
+    r = post_form(
+        consultant,
+        f"{pair.case_url}/notes",
+        {"recommendation": "teleport", "advice": "Something"},
+        from_page=pair.case_url,
+    )
+    assert r.status_code == 422
+    assert 'aria-invalid="true"' in r.text and "Something" in r.text
+    assert pair.note_count() == before
+
+
+def test_a_post_without_the_csrf_token_is_refused(pair, consultant):
+    before = pair.note_count()
+    r = consultant.post(
+        f"{pair.case_url}/notes", data={"recommendation": "transfer", "advice": "forged"}, follow_redirects=False
+    )
+    assert r.status_code == 403
+    assert pair.note_count() == before
+
+
+def test_the_administrator_is_refused_a_case_page_as_by_the_api(pair):
+    with TestClient(create_central_app(pair.center_config, pair.center)) as client:
+        sign_in(client, "it", next="/admin")
+        assert client.get("/", follow_redirects=False).headers["location"] == "/admin"
+        assert client.get(pair.case_url).status_code == 403
+        assert client.get(f"/api/v1/cases/clinic-test/{pair.bundle_id}").status_code == 403
+
+
+def test_signed_out_pages_go_to_the_sign_in(pair):
+    with TestClient(create_central_app(pair.center_config, pair.center)) as client:
+        r = client.get(pair.case_url, follow_redirects=False)
+        assert r.status_code == 303 and r.headers["location"].startswith("/sign-in?next=")
