@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 
 import msgspec
 
+from base.web.pages.rendering import patient_name
 from schemas.central import CaseDetail
 from schemas.clinical_results import Assessment
 from schemas.jobs import BurnAnalysis
@@ -34,9 +35,7 @@ class CaseView:
 
     @property
     def patient_name(self) -> str:
-        data = self.patient.data
-        name = " ".join(p for p in (data.get("given_name", ""), data.get("family_name", "")) if p)
-        return name or "Unnamed patient"
+        return patient_name(self.patient.data)
 
 
 def case_view(services, who, site_id: str, bundle_id: str) -> CaseView:

@@ -6,11 +6,10 @@ import datetime as dt
 from typing import Annotated, Any
 
 from litestar import Controller, get, post
-from litestar.enums import RequestEncodingType
-from litestar.params import Body, Dependency, QueryParameter
+from litestar.params import Dependency, QueryParameter
 from litestar.response import Redirect, Template
 
-from base.web.pages.forms import FormInvalid, field_errors, form_fields, parse_form
+from base.web.pages.forms import FormBody, FormInvalid, field_errors, form_fields, parse_form
 from base.web.pages.rendering import page
 from base.web.paths import IdPath, SiteIdPath
 from base.web.site import AuthedRequest
@@ -19,7 +18,6 @@ from schemas.accounts import Role
 from schemas.central import NoteRequest
 
 CentralServicesDep = Annotated[Any, Dependency(skip_validation=True)]
-FormBody = Annotated[dict[str, Any], Body(media_type=RequestEncodingType.URL_ENCODED)]
 Superseded = Annotated[bool, QueryParameter(description="Also list versions a newer one replaced")]
 
 

@@ -11,11 +11,12 @@ import msgspec
 from litestar import Controller, get, post
 from litestar.response import Redirect, Template
 
+from base.web.pages.forms import FormBody
 from base.web.pages.rendering import page
 from base.web.paths import IdPath
 from base.web.site import AuthedRequest
 from gateway.dependencies import ServicesDep
-from gateway.pages.common import FormBody, posted_text
+from gateway.pages.common import posted_text
 from gateway.pages.encounter_view import encounter_header
 from gateway.pages.pictures import grouped
 from schemas.errors import BurnedgeError, InvalidInput

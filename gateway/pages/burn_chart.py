@@ -13,12 +13,12 @@ from litestar import Controller, get, post
 from litestar.params import QueryParameter
 from litestar.response import Redirect, Template
 
-from base.web.pages.forms import field_errors, form_fields
+from base.web.pages.forms import FormBody, field_errors, form_fields
 from base.web.pages.rendering import page, svg
 from base.web.paths import IdPath
 from base.web.site import AuthedRequest
 from gateway.dependencies import Services, ServicesDep
-from gateway.pages.common import FormBody, may_write, parse_or_errors, posted_version, save_part, saved_first
+from gateway.pages.common import may_write, parse_or_errors, posted_version, save_part, saved_first
 from gateway.pages.encounter_view import encounter_header
 from processing.views.body_chart_svg import REGION_LABELS, body_chart_svg, chart_entries, region_label
 from schemas.burn_chart import BurnChart, BurnChartEntry, BurnDepth, LundBrowderRegion, RegionCharting
@@ -112,7 +112,7 @@ class BurnChartPages(Controller):
         conflict = None
         if not errors:
             try:
-                save_part(
+                record = save_part(
                     services,
                     request.user,
                     RecordKind.burn_chart,
@@ -121,7 +121,7 @@ class BurnChartPages(Controller):
                     version,
                 )
                 if request.headers.get("HX-Request"):
-                    chart, stored_version = _chart(services, request.user, encounter_id)
+                    chart, stored_version = msgspec.convert(record.data, BurnChart), record.meta.version
                     fields = form_fields(RegionCharting, value=region_charting(chart, selected), id_prefix="region")
                     return self._page(
                         request,

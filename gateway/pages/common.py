@@ -3,12 +3,11 @@ messages a person reads when a save did not happen."""
 
 from __future__ import annotations
 
+import datetime as dt
 import re
-from typing import Annotated, Any
+from typing import Any
 
 import msgspec
-from litestar.enums import RequestEncodingType
-from litestar.params import Body
 
 from base.accounts.permissions import WRITE, Principal
 from base.web.pages.forms import FormInvalid, field_errors, parse_form
@@ -16,9 +15,6 @@ from gateway.dependencies import Services
 from schemas.base import ID_PATTERN
 from schemas.errors import Conflict, InvalidInput, VersionMismatch
 from schemas.records import Record, RecordKind
-
-FormBody = Annotated[dict[str, Any], Body(media_type=RequestEncodingType.URL_ENCODED)]
-"""A posted page form: name -> text (a list where a name repeats)."""
 
 
 def posted_text(data: dict[str, Any], name: str) -> str:
@@ -81,3 +77,8 @@ def parse_or_errors(struct_type: type, data: dict[str, Any], fixed: dict) -> tup
 def may_write(who: Principal, kind: RecordKind) -> bool:
     """Whether the page offers a save for this part (the service checks again on the write itself)."""
     return kind in WRITE.get(who.role, frozenset())
+
+
+def local_now_input() -> str:
+    """Now, as a datetime-local input shows it: the gateway's wall time to the minute (a form's default)."""
+    return dt.datetime.now().astimezone().strftime("%Y-%m-%dT%H:%M")

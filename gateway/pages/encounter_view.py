@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 import msgspec
 
 from base.accounts.permissions import Principal
+from base.web.pages.rendering import patient_name
 from gateway.dependencies import Services
 from schemas.clinical_results import Assessment
 from schemas.decision_support import DecisionSupport
@@ -47,9 +48,7 @@ class EncounterView:
 
     @property
     def patient_name(self) -> str:
-        data = self.patient.data
-        name = " ".join(p for p in (data.get("given_name", ""), data.get("family_name", "")) if p)
-        return name or "Unnamed patient"
+        return patient_name(self.patient.data)
 
 
 def encounter_header(services: Services, who: Principal, encounter_id: str) -> tuple[Record, Record]:

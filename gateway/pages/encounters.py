@@ -3,7 +3,6 @@ the API's validation and optimistic concurrency, the recommendation acts and the
 
 from __future__ import annotations
 
-import datetime as dt
 from typing import Annotated
 
 import msgspec
@@ -11,13 +10,13 @@ from litestar import Controller, get, post
 from litestar.params import QueryParameter
 from litestar.response import Redirect, Template
 
-from base.web.pages.forms import field_errors, form_fields
+from base.web.pages.forms import FormBody, field_errors, form_fields
 from base.web.pages.rendering import page
 from base.web.paths import IdPath
 from base.web.site import AuthedRequest
 from gateway.dependencies import ServicesDep
 from gateway.pages.common import (
-    FormBody,
+    local_now_input,
     may_write,
     parse_or_errors,
     posted_version,
@@ -38,10 +37,6 @@ def _slug(slug: str) -> RecordKind:
     if kind is None:
         raise NotFound(f"an encounter has no part {slug!r}: choose one of {', '.join(FORM_PAGES)}")
     return kind
-
-
-def _now_local() -> str:
-    return dt.datetime.now().astimezone().strftime("%Y-%m-%dT%H:%M")
 
 
 class EncounterPages(Controller):
@@ -73,7 +68,7 @@ class EncounterPages(Controller):
             record = None
         struct = RECORD_TYPES[kind]
         if record is None:
-            fields = form_fields(struct, raw={"assessed_at": _now_local()}, skip=SKIP)
+            fields = form_fields(struct, raw={"assessed_at": local_now_input()}, skip=SKIP)
         else:
             fields = form_fields(struct, value=msgspec.convert(record.data, struct), skip=SKIP)
         return self._form(request, encounter, patient, slug, kind, fields, record, {}, None, 200)

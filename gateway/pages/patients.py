@@ -3,20 +3,19 @@ encounter."""
 
 from __future__ import annotations
 
-import datetime as dt
 from typing import Annotated
 
 from litestar import Controller, get, post
 from litestar.params import QueryParameter
 from litestar.response import Redirect, Template
 
-from base.web.pages.forms import form_fields
-from base.web.pages.rendering import page, svg
+from base.web.pages.forms import FormBody, form_fields
+from base.web.pages.rendering import page, patient_name, svg
 from base.web.paths import IdPath
 from base.web.site import AuthedRequest
 from gateway.dependencies import ServicesDep
 from gateway.pages.analyses import PAINTED_SURFACE
-from gateway.pages.common import FormBody, parse_or_errors, posted_id
+from gateway.pages.common import local_now_input, parse_or_errors, posted_id
 from processing.views.healing_plot_svg import healing_plots_svg
 from schemas.accounts import Role
 from schemas.errors import NotFound
@@ -27,11 +26,6 @@ from schemas.records import Record, RecordKind
 Search = Annotated[str, QueryParameter(max_length=200, description="Part of a name or an identifier")]
 PATIENT_SKIP = frozenset({"id"})
 ENCOUNTER_SKIP = frozenset({"id", "patient_id"})
-
-
-def patient_name(data: dict) -> str:
-    name = " ".join(p for p in (data.get("given_name", ""), data.get("family_name", "")) if p)
-    return name or "Unnamed patient"
 
 
 def _matches(record: Record, query: str) -> bool:
@@ -104,8 +98,11 @@ class PatientPages(Controller):
     @get("/patients/{patient_id:str}/encounters/new", sync_to_thread=False)
     def new_encounter_form(self, request: AuthedRequest, patient_id: IdPath, services: ServicesDep) -> Template:
         patient = services.records.get(request.user, RecordKind.patient, patient_id)
-        now = dt.datetime.now().astimezone().strftime("%Y-%m-%dT%H:%M")
-        raw = {"mode": EncounterMode.emergency.value, "time_of_arrival": now, "clinician": request.user.username}
+        raw = {
+            "mode": EncounterMode.emergency.value,
+            "time_of_arrival": local_now_input(),
+            "clinician": request.user.username,
+        }
         fields = form_fields(Encounter, raw=raw, skip=ENCOUNTER_SKIP)
         return page(
             request,

@@ -16,9 +16,8 @@ from litestar import Controller, get, post
 from litestar.params import QueryParameter
 from litestar.response import Redirect, Template
 
-from base.web.pages.forms import FormInvalid, field_errors, form_fields, parse_form
+from base.web.pages.forms import FormBody, FormInvalid, field_errors, form_fields, parse_form
 from base.web.pages.rendering import page
-from base.web.pages.sign_in import FormBody
 from base.web.paths import IdPath
 from base.web.site import AuthedRequest, SiteServices, SiteServicesDep
 from schemas.accounts import PairingCode, PairingCodeRequest, PasswordReset, UserCreate

@@ -10,9 +10,11 @@ from __future__ import annotations
 import datetime as dt
 import math
 import re
-from typing import Any
+from typing import Annotated, Any
 
 import msgspec
+from litestar.enums import RequestEncodingType
+from litestar.params import Body
 
 from base.web.pages.forms_fields import FormField, errors_in, form_fields
 from base.web.pages.forms_spec import NO, YES, FieldSpec, struct_fields
@@ -21,12 +23,14 @@ from base.web.pages.session import CSRF_FIELD
 from schemas.errors import InvalidInput
 from schemas.problem import FieldProblem
 
-__all__ = ["FormField", "FormInvalid", "errors_in", "field_errors", "form_fields", "parse_form"]
+__all__ = ["FormBody", "FormField", "FormInvalid", "errors_in", "field_errors", "form_fields", "parse_form"]
 
 _INT = re.compile(r"[+-]?\d{1,18}\Z")
 _FLOAT = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d{1,3})?\Z")
 _DATE = re.compile(r"\d{4}-\d{2}-\d{2}\Z")
 _DATETIME = re.compile(r"\d{4}-\d{2}-\d{2}[T ]\d{2}:\d{2}")
+FormBody = Annotated[dict[str, Any], Body(media_type=RequestEncodingType.URL_ENCODED)]
+"""A posted page form as a handler receives it: input name -> text (a list where a name repeats)."""
 PAGE_FIELDS = frozenset({CSRF_FIELD, "version"})
 """Hidden inputs the pages add to every form (the CSRF token, the record's version): never a field's value."""
 _AT_PATH = re.compile(r"^(?P<msg>.*?)(?: - at `(?P<path>[^`]*)`)?$", re.S)

@@ -36,6 +36,12 @@ class NavItem:
     """Role values that see the link (the page itself checks again)."""
 
 
+def patient_name(data: dict) -> str:
+    """How a patient is named on every page: given and family name, or "Unnamed patient"."""
+    name = " ".join(p for p in (data.get("given_name", ""), data.get("family_name", "")) if p)
+    return name or "Unnamed patient"
+
+
 def local_time(value: dt.datetime | None, with_date: bool = True) -> str:
     """A stored instant as the clinic reads it: the machine's local zone, to the minute."""
     if value is None:
@@ -75,6 +81,7 @@ def environment(directories: Sequence[Path]) -> Environment:
     env.filters["local_time"] = local_time
     env.filters["number"] = number
     env.filters["when"] = when
+    env.filters["patient_name"] = patient_name
     env.globals["version"] = __version__
     env.globals["errors_in"] = errors_in
     return env

@@ -5,15 +5,12 @@ a cookie (base/web/pages/session.py)."""
 
 from __future__ import annotations
 
-from typing import Annotated, Any
-
 import msgspec
 from litestar import Controller, Request, get, post
-from litestar.enums import RequestEncodingType
-from litestar.params import Body
 from litestar.response import Redirect, Template
 
 from base.web.authentication import BEFORE_PASSWORD_CHANGE_OPT_KEY, EXCLUDE_OPT_KEY
+from base.web.pages.forms import FormBody
 from base.web.pages.rendering import page
 from base.web.pages.session import (
     SIGN_IN_COOKIE,
@@ -25,8 +22,6 @@ from base.web.site import AuthedRequest, SiteServicesDep, client_address
 from schemas.accounts import PasswordChange
 from schemas.base import utcnow
 from schemas.errors import AuthenticationFailed, InvalidInput, TooManyAttempts, WrongPassword
-
-FormBody = Annotated[dict[str, Any], Body(media_type=RequestEncodingType.URL_ENCODED)]
 
 
 def safe_next(target: object) -> str:
