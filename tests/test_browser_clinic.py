@@ -286,10 +286,16 @@ def test_the_clinicians_flow_end_to_end_and_the_consultants_advice_back(sites, b
     shot(page, "15-advice-at-the-clinic")
     center.close()
 
+    # Phone and tablet: every page fits the screen's width (no sideways scrolling).
+    pages = {"encounter": "", "burn-chart": "/burn-chart?region=trunk_anterior", "pictures": "/pictures"}
+    pages |= {"analyses": "/analyses", "fluids": "/parts/fluids"}
     for width, height in (PHONE, TABLET):
         page.set_viewport_size({"width": width, "height": height})
-        page.goto(encounter_url)
-        shot(page, f"11-encounter-{width}")
+        for name, suffix in pages.items():
+            page.goto(encounter_url + suffix)
+            shot(page, f"11-{name}-{width}")
+            overflow = page.evaluate("document.documentElement.scrollWidth - window.innerWidth")
+            assert overflow <= 0, f"{name} is {overflow} px wider than a {width} px screen"
     page.set_viewport_size({"width": DESKTOP[0], "height": DESKTOP[1]})
     assert not problems, f"the browser reported errors: {problems}"
     context.close()
