@@ -2,8 +2,8 @@
 
     .venv/bin/python -m benchmarks.analysis_accuracy [--work DIR] [--model] [--only NAME,...]
 
-Scenes: six of our own phantoms (three body parts, skin types I-VI, flat and cratered burns of
-6-30 cm2) and the four independent ones in ../shared/phantoms (p4: day 0). Each is analysed with
+Scenes: ten of our own phantoms (three body parts, skin types I-VI, flat and cratered burns of
+4-40 cm2, two large full-thickness and two small burns among them) and the four independent ones in ../shared/phantoms (p4: day 0). Each is analysed with
 its true per-view masks given as a person's masks (--masks), so the figures measure the geometry:
 goals (issue 5) area error median <= 2 % and worst <= 5 %, perimeter median <= 5 %, relief_max
 within 0.5 mm of the crater depth, volume within 15 %. With --model the burn comes from the
@@ -33,7 +33,7 @@ from processing.phantom.generate import run as render_phantom
 from processing.reconstruction.pipeline import paths as reconstruction_paths
 from schemas.config import Config
 from schemas.errors import InvalidInput
-from schemas.phantom import PhantomShape, PhantomSpec, SkinTone
+from schemas.phantom import BurnLook, PhantomShape, PhantomSpec, SkinTone
 
 SHARED = Path(__file__).resolve().parents[2] / "shared" / "phantoms"
 OURS = {
@@ -45,6 +45,27 @@ OURS = {
     ),
     "ours_patch_I": PhantomSpec(shape=PhantomShape.patch, seed=35, tone=SkinTone.I, area_cm2=30.0, depth_mm=4.0),
     "ours_foot_III": PhantomSpec(shape=PhantomShape.foot, seed=36, tone=SkinTone.III, area_cm2=12.0, depth_mm=1.0),
+    # issue 20: the burns the model found hardest, large and deep or small (never in training: other seeds)
+    "ours_large_deep_IV": PhantomSpec(
+        shape=PhantomShape.patch,
+        seed=37,
+        tone=SkinTone.IV,
+        area_cm2=40.0,
+        depth_mm=4.0,
+        burn_look=BurnLook.full_thickness,
+    ),
+    "ours_large_deep_II": PhantomSpec(
+        shape=PhantomShape.patch,
+        seed=38,
+        tone=SkinTone.II,
+        area_cm2=40.0,
+        depth_mm=3.0,
+        burn_look=BurnLook.full_thickness,
+    ),
+    "ours_small_V": PhantomSpec(shape=PhantomShape.forearm, seed=39, tone=SkinTone.V, area_cm2=4.0, depth_mm=1.0),
+    "ours_small_I": PhantomSpec(
+        shape=PhantomShape.foot, seed=40, tone=SkinTone.I, area_cm2=5.0, depth_mm=0.0, burn_look=BurnLook.superficial
+    ),
 }
 SHARED_SCENES = {
     "p1_forearm": "p1_forearm",

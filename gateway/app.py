@@ -20,6 +20,7 @@ from base.web.pages.rendering import NAV_KEY, SITE_NAME_KEY, template_config
 from gateway.controllers.analyses import AnalysisController
 from gateway.controllers.assets import AssetController
 from gateway.controllers.decision_support import DecisionSupportController
+from gateway.controllers.model import ModelController
 from gateway.controllers.parts import PART_CONTROLLERS
 from gateway.controllers.records import EncounterController, PatientController
 from gateway.controllers.reports import ReportController
@@ -54,6 +55,7 @@ def create_app(config: Config, *, start_workers: bool = False) -> Litestar:
             UploadController,
             AssetController,
             AnalysisController,
+            ModelController,
             TransferController,
             static_files(),
             *page_controllers(),

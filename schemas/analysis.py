@@ -12,7 +12,7 @@ import msgspec
 
 from schemas.base import Frozen
 from schemas.reconstruction import FailureCode
-from schemas.segmentation import MaskSource
+from schemas.segmentation import FairnessTable, MaskSource
 
 DISCLAIMER = (
     "Decision support, not a diagnosis: measurements of the surface the photos show. Surface relief is "
@@ -52,6 +52,31 @@ class BurnMetrics(Frozen):
     """Separate pieces of burn edge found (1 for a single burn without islands)."""
 
 
+class OutlineEvidence(Frozen):
+    """The raw indicators of how far the model's outline can be trusted (processing/analysis/outline_checks.py)."""
+
+    view_agreement: float | None = None
+    """Mean IoU, on the surface, between the burns two views see where both look (1: every view agrees)."""
+    pass_disagreement: float | None = None
+    """Median over the model's views of 1 - Dice between its first pass and its final mask."""
+    uncertain_band_px: float | None = None
+    """Median width, in model pixels, of the band along the outline where the model hesitates."""
+    outline_contrast: float | None = None
+    """Median CIELAB Delta E across the outline."""
+    skin_tone_ita: float | None = None
+    """Median estimated ITA (degrees) of the skin around the burn over the views."""
+    skin_tone_group: str | None = None
+    """The ITA category of that estimate (very light, light, intermediate, tan, brown, dark)."""
+    group_dice: float | None = None
+    """The model's held-out pooled Dice on real photos of that skin tone group."""
+    group_dice_ci95: list[float] | None = None
+    """Its bootstrap 95 % interval [low, high]; None with too few held-out photos to tell."""
+    group_images: int = 0
+    """Held-out photos in that group."""
+    model_version: str = ""
+    """The segmentation model behind the masks ('' when people drew them all)."""
+
+
 class ConfidenceRecord(Frozen):
     """The raw indicators and the score made from them (weights in docs/analysis.md)."""
 
@@ -75,6 +100,9 @@ class ConfidenceRecord(Frozen):
     """1-sigma relative uncertainty of the scale, in percent."""
     clinician_masks: int = 0
     """Views whose mask a person provided instead of the model."""
+    outline: OutlineEvidence | None = None
+    """How sure the model's outline is, and how the model does on this skin tone; None when people drew
+    every mask."""
 
 
 class ScaleSummary(Frozen):
@@ -100,6 +128,28 @@ class ViewMask(Frozen):
     mask. Outside it the view says nothing (it is not counted as healthy skin)."""
     burn_at_crop_edge: bool = False
     """The model's burn touches the edge of its square: the burn may continue beyond what it looked at."""
+    fine_square: list[int] | None = None
+    """[x0, y0, side] of the model's second, closer look around the burn; None when it did not run."""
+    pass_disagreement: float | None = None
+    """1 - Dice between the model's first pass and its final mask (processing/analysis/outline_checks.py)."""
+    uncertain_band_px: float | None = None
+    """Mean width, in model pixels, of the band along the outline where the model hesitates."""
+    outline_contrast: float | None = None
+    """CIELAB Delta E between just inside and just outside the outline; low: burn and skin look alike."""
+    skin_ita: float | None = None
+    """Estimated ITA (degrees) of the healthy skin around the burn; None where too little skin shows."""
+
+
+class ModelSummary(Frozen):
+    """Which segmentation model drew the masks, how it ran, and how it scores by skin tone."""
+
+    version: str
+    """From the model file's metadata ('' for a model made before versions were stamped)."""
+    sha256: str
+    threshold: float
+    """Probability the model cuts at; the probability maps are rescaled so it sits at 0.5."""
+    fairness: FairnessTable | None = None
+    """Held-out Dice by skin tone, from the model file (docs/segmentation-model.md)."""
 
 
 class SegmentationRecord(Frozen):
@@ -108,6 +158,8 @@ class SegmentationRecord(Frozen):
     views: list[ViewMask]
     unmatched_masks: list[str] = msgspec.field(default_factory=list)
     """Files in --masks named after no placed picture (a typo, or a picture SfM could not place): not used."""
+    model: ModelSummary | None = None
+    """The segmentation model that drew the masks; None when people drew every one."""
 
 
 class ReferenceRecord(Frozen):

@@ -2,17 +2,19 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import cv2
+import msgspec
 import numpy as np
 import pytest
 
 from processing.segmentation import datasets
 from processing.segmentation.infer import SHIPPED_MODEL, BurnSegmenter
 from processing.segmentation.scores import dice_iou, split_scores
-from schemas.segmentation import TrainingConfig
+from processing.segmentation.skin_tone import CATEGORIES
+from schemas.errors import InvalidInput
+from schemas.segmentation import FairnessTable, TrainingConfig, TrainingReport
 from tests.conftest import SHARED
 
 FUSEG = SHARED / "datasets" / "fuseg2021-train"
@@ -39,31 +41,75 @@ def test_the_validation_split_is_fixed_by_name():
 
 
 @pytest.mark.skipif(not FUSEG.exists(), reason="needs ../shared/datasets/fuseg2021-train")
-def test_the_real_photos_split_into_train_and_held_out_without_overlap():
-    train, val = datasets.real_samples(FUSEG, 15)
-    assert len(train) + len(val) == 810 and 90 < len(val) < 150
-    assert not {s.name for s in train} & {s.name for s in val}
-    assert all(s.mask.dtype == np.uint8 and set(np.unique(s.mask)) <= {0, 1} for s in val[:5])
+def test_the_real_photos_split_into_train_tune_and_held_out_without_overlap():
+    splits = datasets.real_samples(FUSEG, 15, 10)
+    names = {k: {s.name for s in v} for k, v in splits.items()}
+    assert sum(map(len, names.values())) == 810 and 90 < len(names["validation"]) < 150
+    assert 50 < len(names["tune"]) < 120
+    assert not names["train"] & names["validation"] and not names["tune"] & (names["train"] | names["validation"])
+    # the held-out photos are the same whatever share is set aside for tuning
+    assert names["validation"] == {s.name for s in datasets.real_samples(FUSEG, 15, 0)["validation"]}
+    assert all(s.mask.dtype == np.uint8 and set(np.unique(s.mask)) <= {0, 1} for s in splits["validation"][:5])
 
 
 def test_training_scenes_cover_every_skin_type_and_burn_look():
     conf = TrainingConfig()
     specs = [datasets.phantom_spec(i, conf) for i in range(conf.synthetic_scenes)]
     assert {s.tone for s in specs} == set(datasets.TONES) and {s.burn_look for s in specs} == set(datasets.LOOKS)
-    held = [s for i, s in enumerate(specs) if i % 5 == 0]
+    split = [datasets.scene_split(i) for i in range(conf.synthetic_scenes)]
+    held = [s for s, k in zip(specs, split, strict=True) if k == "validation"]
     assert {s.tone for s in held} == set(datasets.TONES)  # scores per skin type on scenes never trained on
+    assert split.count("tune") >= 5 and split.count("train") > 40
     assert datasets.phantom_spec(7, conf) == specs[7]
 
 
-def test_the_shipped_model_is_small_and_says_what_it_is():
+def test_the_shipped_model_says_what_it_is_how_it_runs_and_how_it_does_by_skin_tone():
     assert SHIPPED_MODEL.stat().st_size <= 25 * 2**20
     segmenter = BurnSegmenter(SHIPPED_MODEL)
-    meta = segmenter.session.get_modelmeta().custom_metadata_map
-    assert segmenter.input_size % 16 == 0 and "CC BY-NC" in meta["license"] and meta["card"].endswith(".md")
-    report = json.loads((SHIPPED_MODEL.parent / "training_report.json").read_text())
-    assert report["model_file"] == SHIPPED_MODEL.name and set(report["synthetic_by_tone"]) == set(
-        "I II III IV V VI".split()
+    meta = segmenter.metadata
+    assert "CC BY-NC" in meta["license"] and meta["card"].endswith(".md") and meta["version"].startswith("burnseg-")
+    report = msgspec.json.decode((SHIPPED_MODEL.parent / "training_report.json").read_bytes(), type=TrainingReport)
+    assert report.model_file == SHIPPED_MODEL.name and report.model_sha256 == segmenter.sha256
+    assert report.model_version == meta["version"] and report.passes == segmenter.settings
+    assert set(report.synthetic_by_tone) == set("I II III IV V VI".split())
+    table = msgspec.json.decode(meta["fairness"], type=FairnessTable)
+    assert table == report.fairness and [g.group for g in table.real_by_ita] == [c for c, _ in CATEGORIES]
+    assert sum(g.images for g in table.real_by_ita) + table.photos_without_skin_estimate == (
+        report.real_validation.images
     )
+    # the tuning chose among settings it timed; the held-out photos chose nothing
+    assert any(t.name.endswith(f"at {report.passes.threshold:.2f}") for t in report.trials)
+    assert len(report.tune_history) == report.epochs_run == len(report.loss_history)
+
+
+def tiny_dataset(folder: Path, count: int = 16) -> Path:
+    (folder / "images").mkdir(parents=True)
+    (folder / "masks").mkdir()
+    rng = np.random.default_rng(0)
+    for i in range(count):
+        image = rng.integers(0, 255, (96, 96, 3), np.uint8)
+        mask = np.zeros((96, 96), np.uint8)
+        cv2.circle(mask, (48, 48), 10 + i, 255, -1)
+        image[mask > 0] = (200, 40, 40)
+        cv2.imwrite(str(folder / "images" / f"{i:03d}.jpg"), image)
+        cv2.imwrite(str(folder / "masks" / f"{i:03d}.png"), mask)
+    return folder
+
+
+TINY = dict(
+    input_size=64,
+    widths=[4, 8, 8, 8, 8],
+    synthetic_scenes=0,
+    synthetic_per_epoch=0,
+    batch_size=4,
+    validation_percent=25,
+    tune_percent=25,
+    scales=[64],
+    coarse_sizes=[64],
+    thresholds=[0.4, 0.5],
+    bootstrap_draws=200,
+    threads=1,
+)
 
 
 def test_a_tiny_training_run_exports_a_model_onnxruntime_can_run(tmp_path: Path):
@@ -71,28 +117,33 @@ def test_a_tiny_training_run_exports_a_model_onnxruntime_can_run(tmp_path: Path)
     pytest.importorskip("onnx", reason="training needs the train extra (pip install -e '.[train]')")
     from processing.segmentation.train import run
 
-    data = tmp_path / "data"
-    (data / "images").mkdir(parents=True)
-    (data / "masks").mkdir()
-    rng = np.random.default_rng(0)
-    for i in range(12):
-        image = rng.integers(0, 255, (96, 96, 3), np.uint8)
-        mask = np.zeros((96, 96), np.uint8)
-        cv2.circle(mask, (48, 48), 20 + i, 255, -1)
-        image[mask > 0] = (200, 40, 40)
-        cv2.imwrite(str(data / "images" / f"{i:03d}.jpg"), image)
-        cv2.imwrite(str(data / "masks" / f"{i:03d}.png"), mask)
-    conf = TrainingConfig(
-        input_size=64,
-        widths=[4, 8, 8, 8, 8],
-        epochs=1,
-        synthetic_scenes=0,
-        synthetic_per_epoch=0,
-        batch_size=4,
-        validation_percent=25,
-        threads=1,
+    data = tiny_dataset(tmp_path / "data")
+    conf = TrainingConfig(epochs=1, **TINY)
+    report = msgspec.json.decode(
+        run(conf, data, tmp_path / "out", tmp_path / "cache").read_bytes(), type=TrainingReport
     )
-    report = json.loads(run(conf, data, tmp_path / "out", tmp_path / "cache").read_text())
-    assert report["epochs_run"] == 1 and report["real_validation"]["images"] >= 1
-    prob = BurnSegmenter(tmp_path / "out" / report["model_file"]).probability(np.zeros((50, 70, 3), np.uint8))
+    assert report.epochs_run == 1 and report.real_validation.images >= 1 and report.real_tune_images >= 1
+    assert len(report.trials) == 2 * 2 + 1  # one pass or two, at two thresholds; then the flips
+    segmenter = BurnSegmenter(tmp_path / "out" / report.model_file)
+    assert segmenter.settings == report.passes and segmenter.metadata["version"] == report.model_version
+    prob = segmenter.probability(np.zeros((50, 70, 3), np.uint8))
     assert prob.shape == (50, 70) and 0 <= prob.min() <= prob.max() <= 1
+
+
+def test_a_stopped_training_run_continues_to_the_same_weights(tmp_path: Path):
+    torch = pytest.importorskip("torch", reason="training needs the train extra (pip install -e '.[train]')")
+    from processing.segmentation.train import train
+
+    data = tiny_dataset(tmp_path / "data")
+    conf = TrainingConfig(epochs=3, **TINY)
+    real = datasets.real_samples(data, conf.validation_percent, conf.tune_percent)
+    synthetic = {"train": [], "tune": [], "validation": []}
+    whole, whole_state = train(conf, real, synthetic, tmp_path / "whole")
+    _, first = train(conf, real, synthetic, tmp_path / "parts", stop_after=1)
+    assert first["epoch"] == 1
+    resumed, state = train(conf, real, synthetic, tmp_path / "parts")
+    assert state["epoch"] == 3 and state["loss_history"] == whole_state["loss_history"]
+    for a, b in zip(whole.state_dict().values(), resumed.state_dict().values(), strict=True):
+        assert torch.equal(a, b)
+    with pytest.raises(InvalidInput, match="another recipe"):
+        train(TrainingConfig(epochs=4, **TINY), real, synthetic, tmp_path / "parts")

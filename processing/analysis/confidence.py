@@ -3,6 +3,9 @@
     z = B0 + B_SEEN * seen3 + B_INLIER * inlier_ratio + B_REPROJ * reprojection_px
           + B_SCALE * scale_uncertainty_percent + B_VIEWS * min(views_seeing_burn, 10) / 10
           - UNSCALED_PENALTY (no scale) - CUT_OFF_PENALTY (the burn may continue beyond the surface)
+          + the outline's penalties (processing/analysis/outline_evidence.py: views disagreeing on the
+            surface, the model's two passes disagreeing, a hesitant or low-contrast edge, a skin tone
+            the model is weak or little tested on)
     C = 1 / (1 + exp(-z))
 
 The weights are set by hand, not fitted (there is no labelled set of trusted and untrusted burn
@@ -16,7 +19,8 @@ from __future__ import annotations
 
 import math
 
-from schemas.analysis import ConfidenceRecord
+from processing.analysis import outline_evidence
+from schemas.analysis import ConfidenceRecord, OutlineEvidence
 
 B0 = -7.5
 B_SEEN = 8.0
@@ -41,6 +45,7 @@ def score(
     *,
     cut_off: bool = False,
     min_views: int = 3,
+    outline: OutlineEvidence | None = None,
 ) -> ConfidenceRecord:
     unc = scale_uncertainty_percent
     terms = {
@@ -51,7 +56,8 @@ def score(
         "scale": B_SCALE * unc if unc is not None else -UNSCALED_PENALTY - B_SCALE * 0.3,
         "cut_off": -CUT_OFF_PENALTY if cut_off else 0.0,
     }
-    c = 1.0 / (1.0 + math.exp(-(B0 + sum(terms.values()))))
+    outline_terms, outline_reasons = outline_evidence.terms(outline) if outline else ({}, [])
+    c = 1.0 / (1.0 + math.exp(-(B0 + sum(terms.values()) + sum(outline_terms.values()))))
     reasons = []
     if unc is None:
         reasons.append("no scale was found: put the printed marker flat beside the burn, in every photo")
@@ -73,6 +79,7 @@ def score(
             "the burn reaches the edge of the reconstructed surface: part of it may be missing; "
             "take photos that show healthy skin all around it"
         )
+    reasons += outline_reasons
     level = "high" if c >= 0.8 else "moderate" if c >= 0.5 else "low"
     if level != "high" and not reasons:
         # No single indicator is poor, but together they are: name the weakest against a good capture.
@@ -103,4 +110,5 @@ def score(
         burn_seen_by_3_fraction=round(seen3, 3),
         scale_uncertainty_percent=None if unc is None else round(unc, 3),
         clinician_masks=clinician_masks,
+        outline=outline,
     )

@@ -59,6 +59,26 @@ def log_odds(p: np.ndarray, w: np.ndarray) -> np.ndarray:
     return _unseen_nan(1.0 / (1.0 + np.exp(-mean)), seen)
 
 
+MIN_PAIR_VERTICES = 50
+"""Two views whose burns together cover fewer shared vertices than this are not compared."""
+
+
+def view_agreement(p: np.ndarray, w: np.ndarray, keep: np.ndarray) -> float | None:
+    """Mean IoU between the burns (p >= 0.5) of every two views, over the vertices in `keep` both see:
+    1 when each view outlines the same burn, low when they disagree where it ends. None with no pair."""
+    seen = (np.asarray(w) > 0) & keep
+    burn = (np.asarray(p) >= 0.5) & seen
+    ious = []
+    for i in range(len(p)):
+        for j in range(i + 1, len(p)):
+            both = seen[i] & seen[j]
+            a, b = burn[i] & both, burn[j] & both
+            union = int(np.count_nonzero(a | b))
+            if union >= MIN_PAIR_VERTICES:
+                ious.append(np.count_nonzero(a & b) / union)
+    return round(float(np.mean(ious)), 4) if ious else None
+
+
 _RULES = {FusionRule.noisy_or: noisy_or, FusionRule.weighted_mean: weighted_mean, FusionRule.log_odds: log_odds}
 
 

@@ -50,8 +50,17 @@ class Measurement(Frozen):
     burn_at_surface_edge: bool
     """Burn reaches the border of the reconstructed surface or surface no picture saw: it may continue there."""
     perimeter_smoothing_mm: float
+    view_agreement: float | None = None
+    """Mean IoU of the views' burns on the surface (processing/analysis/fusion.py view_agreement)."""
     relief_note: str = ""
     """Why relief and volume are missing or uncertain, when they are."""
+
+
+def agreement_of(data) -> float | None:
+    """The surface stage's view agreement; None from a surface made before it was measured, or no pair."""
+    if "view_agreement" not in data or np.isnan(data["view_agreement"]):
+        return None
+    return float(data["view_agreement"])
 
 
 def burn_at_edge(faces: np.ndarray, q: np.ndarray) -> bool:
@@ -138,6 +147,7 @@ def run(
         open_edges=sum(not loop.closed for loop in loops),
         burn_at_surface_edge=burn_at_edge(faces, q),
         perimeter_smoothing_mm=SMOOTHING_MM,
+        view_agreement=agreement_of(data),
         relief_note=relief_note,
     )
     write_json(out_dir / RESULT, msgspec.to_builtins(result))

@@ -21,7 +21,7 @@ from pathlib import Path
 import msgspec
 import numpy as np
 
-from processing.analysis import confidence, measure, segment_views, surface_map
+from processing.analysis import confidence, measure, outline_evidence, segment_views, surface_map
 from processing.clinical.bsa import mosteller
 from processing.reconstruction import pipeline as reconstruction
 from processing.reconstruction.dense import DenseInfo
@@ -212,6 +212,7 @@ def _result(
         clinician_masks=sum(m.source is not MaskSource.model for m in masks),
         cut_off=measured.open_edges > 0 or measured.burn_at_surface_edge,
         min_views=config.analysis.min_views_for_confidence,
+        outline=outline_evidence.gather(segmentation, measured.view_agreement),
     )
     notes = []
     if segmentation.unmatched_masks:

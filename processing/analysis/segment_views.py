@@ -16,13 +16,15 @@ import cv2
 import msgspec
 import numpy as np
 
+from processing.analysis import outline_checks
 from processing.reconstruction.views import read_rgb
+from processing.segmentation import passes
 from processing.segmentation.infer import Box, BurnSegmenter
 from processing.stages import fresh_dir, publish_dir, write_json
-from schemas.analysis import SegmentationRecord, ViewMask
+from schemas.analysis import ModelSummary, SegmentationRecord, ViewMask
 from schemas.config import AnalysisConfig
 from schemas.errors import InvalidInput
-from schemas.segmentation import MaskSource
+from schemas.segmentation import FairnessTable, MaskSource
 
 log = logging.getLogger(__name__)
 
@@ -103,6 +105,40 @@ def _edge_touched(mask: np.ndarray, box: Box) -> bool:
     return any(inner and line.any() for inner, line in sides)
 
 
+def _model_mask(
+    segmenter: BurnSegmenter, rgb: np.ndarray, box: Box | None, tmp: Path, stem: str
+) -> tuple[np.ndarray, MaskSource, dict]:
+    """The model's mask of one picture, its probability map written (rescaled: the model's threshold at
+    0.5), and the ViewMask fields that say how sure the outline is."""
+    two = segmenter.segment(rgb, box)
+    threshold = segmenter.settings.threshold
+    prob = passes.rescaled(two.probability, threshold)
+    mask = prob >= 0.5
+    extra = {"probability": f"probability/{stem}.png"}
+    _write(tmp / extra["probability"], np.round(prob * 255).astype(np.uint8))
+    if box is not None:
+        extra |= {"crop": [box.x0, box.y0, box.side], "burn_at_crop_edge": _edge_touched(mask, box)}
+    if two.fine_square is not None:
+        extra["fine_square"] = [two.fine_square.x0, two.fine_square.y0, two.fine_square.side]
+    extra |= outline_checks.view_checks(rgb, two, threshold, box, segmenter.settings.fine_size)
+    return mask, MaskSource.model, extra
+
+
+def model_summary(segmenter: BurnSegmenter) -> ModelSummary:
+    """What the segmentation record keeps of the model: version, hash, threshold, fairness table."""
+    table = segmenter.metadata.get("fairness")
+    try:
+        fairness = msgspec.json.decode(table, type=FairnessTable) if table else None
+    except msgspec.ValidationError:
+        fairness = None  # a model trained with another table layout: its fairness is not known here
+    return ModelSummary(
+        version=segmenter.metadata.get("version", ""),
+        sha256=segmenter.sha256,
+        threshold=segmenter.settings.threshold,
+        fairness=fairness,
+    )
+
+
 def run(
     conf: AnalysisConfig,
     images_dir: Path,
@@ -131,12 +167,7 @@ def run(
             mask, source = person_mask(masks_dir, person_stem, rgb.shape[:2])
         else:
             segmenter = segmenter or BurnSegmenter(conf.model, conf.threads)
-            prob = segmenter.probability(rgb, box)
-            mask, source = prob >= 0.5, MaskSource.model
-            extra["probability"] = f"probability/{stem}.png"
-            _write(tmp / extra["probability"], np.round(prob * 255).astype(np.uint8))
-            if box is not None:
-                extra |= {"crop": [box.x0, box.y0, box.side], "burn_at_crop_edge": _edge_touched(mask, box)}
+            mask, source, extra = _model_mask(segmenter, rgb, box, tmp, stem)
         _write(tmp / "masks" / f"{stem}.png", mask.astype(np.uint8) * 255)
         _write(tmp / "overlays" / f"{stem}.jpg", overlay(rgb, mask), cv2.IMWRITE_JPEG_QUALITY, 85)
         records.append(
@@ -150,7 +181,11 @@ def run(
             )
         )
         log.info("segmented %s (%s, %d burn pixels)", name, source.value, records[-1].burn_pixels)
-    record = SegmentationRecord(views=records, unmatched_masks=sorted(given - used))
+    record = SegmentationRecord(
+        views=records,
+        unmatched_masks=sorted(given - used),
+        model=model_summary(segmenter) if segmenter and any(r.source is MaskSource.model for r in records) else None,
+    )
     write_json(tmp / RECORD, msgspec.to_builtins(record))
     publish_dir(tmp, out_dir)
     return out_dir / RECORD

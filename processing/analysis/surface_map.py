@@ -122,6 +122,7 @@ def run(
         q_rule[outside] = np.nan  # not part of the burn region: neither burn nor healthy ring
         q_rule[stray_regions(vertices, faces, q_rule)] = np.nan
     q = fused[conf.fusion_rule]
+    agreement = fusion.view_agreement(p, w, ~np.isnan(q))
     if not np.any(np.nan_to_num(q) >= 0.5):
         raise CaptureInsufficient(
             "no burn was found on the reconstructed surface; check the overlays, or draw the burn's outline "
@@ -138,6 +139,7 @@ def run(
         views_per_vertex=fusion.views_per_vertex(w),
         view_sees_burn=np.any(w[:, in_burn] > 0, axis=1),
         view_names=np.array([v.name for v in views]),
+        view_agreement=np.float64(np.nan if agreement is None else agreement),
         **{f"q_{k}": v for k, v in fused.items()},
     )
     tmp.replace(out_dir / ARRAYS)

@@ -14,7 +14,7 @@ from processing.report.inputs import AnalysisPage, ReportInputs
 from processing.report.layout import GREY, URGENT, ReportPDF
 from processing.report.plots import line_plot
 from processing.report.surface_render import render_surface
-from schemas.analysis import DISCLAIMER, AnalysisStatus
+from schemas.analysis import DISCLAIMER, AnalysisStatus, ConfidenceRecord
 from schemas.errors import InvalidInput
 
 log = logging.getLogger(__name__)
@@ -110,6 +110,7 @@ def _analysis(pdf: ReportPDF, page: AnalysisPage, scratch: Path) -> None:
                 f"placed, {conf.views_seeing_burn} see the burn",
             )
         )
+    rows.append(("Outline drawn by", _outline_source(conf)))
     rows.append(("Time since injury", hours(result.hours_since_injury)))
     pdf.facts(rows)
     if conf is not None and conf.reasons:
@@ -119,6 +120,28 @@ def _analysis(pdf: ReportPDF, page: AnalysisPage, scratch: Path) -> None:
         pdf.bullets(result.notes, colour=GREY)
     pdf.para(RELIEF_IS_GEOMETRY, bold=True)
     pdf.para(DISCLAIMER, colour=GREY, size=7.5)
+
+
+def _outline_source(conf: ConfidenceRecord | None) -> str:
+    """The model section: which model outlined the burn, and its held-out accuracy on this skin tone."""
+    e = conf.outline if conf else None
+    if e is None:
+        return "a clinician, on every photo used" if conf and conf.clinician_masks else "not recorded"
+    words = f"segmentation model {e.model_version or '(unversioned)'}"
+    if e.skin_tone_group is None:
+        return words + "; the skin tone around the burn could not be estimated"
+    words += f"; skin around the burn estimated {e.skin_tone_group} (ITA {e.skin_tone_ita:.0f}°)"
+    if e.group_dice is None:
+        return words + "; the model has no held-out score for this skin tone"
+    interval = (
+        f", 95 % CI {e.group_dice_ci95[0]:.2f}–{e.group_dice_ci95[1]:.2f}"
+        if e.group_dice_ci95
+        else ", too few to give an interval"
+    )
+    return (
+        words + f"; held-out Dice on real wound photos of this tone {e.group_dice:.2f} ({e.group_images} photos"
+        f"{interval}). Fairness table by skin tone: docs/segmentation-model.md and GET /api/v1/segmentation-model"
+    )
 
 
 def _small_jpeg(source: Path, target: Path, longest: int = 900) -> Path | None:

@@ -1,9 +1,11 @@
 """Training data for the burn segmentation model: real wound photos and rendered phantom burns.
 
-Real: FUSeg 2021 foot-ulcer photos with wound masks (../shared/datasets/fuseg2021-train). The
-validation split is chosen by a hash of the file name, so it never changes and is never trained on.
+Real: FUSeg 2021 foot-ulcer photos with wound masks (../shared/datasets/fuseg2021-train). A hash of the
+file name puts each photo in the validation split (never trained or tuned on), the tuning split (chooses
+the threshold and the passes) or training, so the splits never change.
 Synthetic: phantom scenes rendered by `processing.phantom` across skin types, burn looks, body parts,
-healing and crater depth; every fifth scene is held out whole (no view of it is trained on).
+healing and crater depth; every fifth scene is held out whole and every tenth from the sixth on is kept
+for tuning (no view of either is trained on).
 """
 
 from __future__ import annotations
@@ -41,8 +43,27 @@ class Sample:
     name: str
 
 
+def _bucket(name: str) -> int:
+    return int(hashlib.sha256(name.encode()).hexdigest()[:8], 16) % 100
+
+
 def is_validation(name: str, percent: int) -> bool:
-    return int(hashlib.sha256(name.encode()).hexdigest()[:8], 16) % 100 < percent
+    return _bucket(name) < percent
+
+
+def real_split(name: str, validation_percent: int, tune_percent: int) -> str:
+    """'validation', 'tune' or 'train' for a photo, by a hash of its file name."""
+    bucket = _bucket(name)
+    if bucket < validation_percent:
+        return "validation"
+    return "tune" if bucket < validation_percent + tune_percent else "train"
+
+
+def scene_split(index: int) -> str:
+    """'validation' (every fifth scene), 'tune' (every tenth from the fourth on) or 'train'."""
+    if index % 5 == 0:
+        return "validation"
+    return "tune" if index % 10 == 3 else "train"
 
 
 def read_mask(path: Path) -> np.ndarray:
@@ -52,19 +73,19 @@ def read_mask(path: Path) -> np.ndarray:
     return (mask >= 128).astype(np.uint8)
 
 
-def real_samples(root: Path, percent: int) -> tuple[list[Sample], list[Sample]]:
-    """(train, validation) from a folder with images/ and masks/ of the same stems."""
+def real_samples(root: Path, percent: int, tune_percent: int = 0) -> dict[str, list[Sample]]:
+    """{'train', 'tune', 'validation'} photos from a folder with images/ and masks/ of the same stems."""
     images = sorted((root / "images").glob("*.jpg")) + sorted((root / "images").glob("*.png"))
     if not images:
         raise InvalidInput(f"{root}: no images/ with .jpg or .png photos; is the dataset there?")
-    train, val = [], []
+    splits: dict[str, list[Sample]] = {"train": [], "tune": [], "validation": []}
     for image in images:
         mask = root / "masks" / f"{image.stem}.png"
         if not mask.exists():
             raise InvalidInput(f"{image}: no mask {mask}")
         sample = Sample(read_rgb(image), read_mask(mask), "real", image.name)
-        (val if is_validation(image.name, percent) else train).append(sample)
-    return train, val
+        splits[real_split(image.name, percent, tune_percent)].append(sample)
+    return splits
 
 
 def phantom_spec(index: int, conf: TrainingConfig) -> PhantomSpec:
@@ -79,7 +100,7 @@ def phantom_spec(index: int, conf: TrainingConfig) -> PhantomSpec:
         supersample=1.0,
         tone=TONES[index % len(TONES)],
         burn_look=LOOKS[(index // len(TONES)) % len(LOOKS)],
-        area_cm2=float(rng.uniform(3.0, 30.0)),
+        area_cm2=float(rng.uniform(2.0, 40.0)),
         depth_mm=float(rng.choice([0.0, rng.uniform(0.5, 4.0)])),
         healing=float(rng.choice([0.0, rng.uniform(0.0, 0.6)])),
         distance_min_mm=150.0,
@@ -130,16 +151,19 @@ def burn_crops(rgb: np.ndarray, mask: np.ndarray, rng: np.random.Generator, coun
         )
 
 
-def synthetic_samples(scenes: list[tuple[Path, PhantomSpec]], conf: TrainingConfig, crops_per_view: int = 3):
-    """(train, validation) crops around each view's burn; a held-out scene gives only validation crops."""
-    train, val = [], []
+def synthetic_samples(
+    scenes: list[tuple[Path, PhantomSpec]], conf: TrainingConfig, crops_per_view: int = 3
+) -> dict[str, list[Sample]]:
+    """{'train', 'tune', 'validation'} crops around each view's burn; a scene kept out of training gives one
+    loose crop per view, as the analysis's region around the burn would be."""
+    splits: dict[str, list[Sample]] = {"train": [], "tune": [], "validation": []}
     size = conf.input_size * 2  # kept at twice the input so augmentation can rescale
     for index, (folder, spec) in enumerate(scenes):
         rng = np.random.default_rng([conf.seed, 7, index])
-        held_out = index % 5 == 0
+        split = scene_split(index)
+        count = crops_per_view if split == "train" else 1
         for image in sorted((folder / "images").glob("*.jpg")):
             rgb, mask = read_rgb(image), read_mask(folder / "masks" / f"{image.stem}.png")
-            for k, (crop, crop_mask) in enumerate(burn_crops(rgb, mask, rng, 1 if held_out else crops_per_view, size)):
-                sample = Sample(crop, crop_mask, spec.tone.value, f"{folder.name}/{image.stem}#{k}")
-                (val if held_out else train).append(sample)
-    return train, val
+            for k, (crop, crop_mask) in enumerate(burn_crops(rgb, mask, rng, count, size)):
+                splits[split].append(Sample(crop, crop_mask, spec.tone.value, f"{folder.name}/{image.stem}#{k}"))
+    return splits

@@ -1,19 +1,23 @@
 """Running the burn segmentation model with onnxruntime on the CPU.
 
-The model sees a square: a crop around where the burn is expected (from the reconstruction) or
-the whole picture, resized to its input side; its probabilities are resized back and pasted in.
+The model looks twice (processing/segmentation/passes.py): over the square around where the burn is
+expected (from the reconstruction) or the whole picture, then closer over a square around the burn it
+found. How it runs (sides, threshold) is in the model file's metadata, chosen when it was trained.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import hashlib
 from pathlib import Path
 
-import cv2
 import numpy as np
 import onnxruntime as ort
 
+from processing.segmentation import passes
+from processing.segmentation.passes import Square as Box
+from processing.segmentation.passes import TwoPass
 from schemas.errors import InvalidInput, plain
+from schemas.segmentation import PassSettings
 
 SHIPPED_MODEL = Path(__file__).parent / "models" / "burnseg.onnx"
 
@@ -31,27 +35,26 @@ def read_rgb(path: Path) -> np.ndarray:
         raise InvalidInput(f"{path.name} could not be decoded as a photo ({plain(exc)})") from exc
 
 
-@dataclass(frozen=True)
-class Box:
-    """A square region of a picture in pixels: x0, y0 inclusive, side."""
-
-    x0: int
-    y0: int
-    side: int
-
-    @classmethod
-    def around(cls, cx: float, cy: float, radius: float, width: int, height: int) -> Box:
-        """The square of half-side radius centred on (cx, cy), moved (not shrunk) to fit in the picture."""
-        side = int(min(2 * radius, width, height))
-        x0 = int(np.clip(round(cx - side / 2), 0, width - side))
-        y0 = int(np.clip(round(cy - side / 2), 0, height - side))
-        return cls(x0, y0, side)
+def settings_of(meta: dict[str, str]) -> PassSettings:
+    """The passes a model file asks for; a model from before the second pass runs one pass at 0.5."""
+    size = int(meta.get("input_size", "192"))
+    try:
+        return PassSettings(
+            coarse_size=int(meta.get("coarse_size", size)),
+            fine_size=size,
+            threshold=float(meta.get("threshold", "0.5")),
+            fine_pass=meta.get("fine_pass", "false") == "true",
+        )
+    except ValueError as exc:
+        raise InvalidInput(
+            f"the segmentation model's metadata is not understood ({exc}); retrain or re-export it"
+        ) from exc
 
 
 class BurnSegmenter:
-    """One onnxruntime session; `probability` is safe to call repeatedly (not from several threads)."""
+    """One onnxruntime session; safe to call repeatedly (not from several threads)."""
 
-    def __init__(self, model: str | Path = "", threads: int = 1):
+    def __init__(self, model: str | Path = "", threads: int = 1, settings: PassSettings | None = None):
         path = Path(model) if model else SHIPPED_MODEL
         if not path.is_file():
             raise InvalidInput(f"segmentation model {path} not found; set [analysis] model to an ONNX file")
@@ -62,25 +65,22 @@ class BurnSegmenter:
             self.session = ort.InferenceSession(str(path), options, providers=["CPUExecutionProvider"])
         except Exception as exc:  # onnxruntime raises its own untyped errors for unreadable models
             raise InvalidInput(f"segmentation model {path} cannot be loaded: {exc}") from exc
-        meta = self.session.get_modelmeta().custom_metadata_map
-        self.input_size = int(meta.get("input_size", "192"))
+        self.metadata = dict(self.session.get_modelmeta().custom_metadata_map)
+        self.sha256 = hashlib.sha256(path.read_bytes()).hexdigest()
+        self.settings = settings or settings_of(self.metadata)
         self.path = path
 
-    def _run(self, rgb: np.ndarray) -> np.ndarray:
-        x = cv2.resize(rgb, (self.input_size, self.input_size), interpolation=cv2.INTER_AREA)
-        x = np.ascontiguousarray(x.transpose(2, 0, 1)[None], dtype=np.float32) / 255.0
-        return self.session.run(None, {"image": x})[0][0, 0]
+    def network(self, x: np.ndarray) -> np.ndarray:
+        """Probability (N, H, W) for float32 NCHW RGB in [0, 1]."""
+        return self.session.run(None, {"image": x})[0][:, 0]
 
-    def probability(self, rgb: np.ndarray, box: Box | None = None) -> np.ndarray:
-        """Burn probability (H, W) float32 for an RGB uint8 picture; 0 outside the box when one is given."""
+    def segment(self, rgb: np.ndarray, region: Box | None = None) -> TwoPass:
+        """Both passes over an RGB uint8 picture (region None: the whole picture)."""
         if rgb.ndim != 3 or rgb.shape[2] != 3 or rgb.dtype != np.uint8:
             raise InvalidInput(f"expected an RGB uint8 picture, got shape {rgb.shape} {rgb.dtype}")
-        h, w = rgb.shape[:2]
-        if box is None:
-            return cv2.resize(self._run(rgb), (w, h), interpolation=cv2.INTER_LINEAR)
-        out = np.zeros((h, w), np.float32)
-        crop = rgb[box.y0 : box.y0 + box.side, box.x0 : box.x0 + box.side]
-        out[box.y0 : box.y0 + box.side, box.x0 : box.x0 + box.side] = cv2.resize(
-            self._run(crop), (box.side, box.side), interpolation=cv2.INTER_LINEAR
-        )
-        return out
+        return passes.segment(self.network, rgb, region, self.settings)
+
+    def probability(self, rgb: np.ndarray, region: Box | None = None) -> np.ndarray:
+        """Burn probability (H, W) float32, rescaled so burn is >= 0.5 whatever threshold the model was
+        tuned to; 0 outside what the passes looked at."""
+        return passes.rescaled(self.segment(rgb, region).probability, self.settings.threshold)

@@ -1,17 +1,14 @@
-"""Training the burn segmentation model on the CPU and exporting it to ONNX (needs the `train` extra).
+"""Training the burn segmentation model on the CPU (needs the `train` extra); resumable after every epoch.
 
     run(conf, real_root, out_dir, cache_dir) -> out_dir/training_report.json
 
-Loss: L = a * soft Dice + (1 - a) * BCE (the seed's). One-cycle AdamW. Scores are measured on the
-held-out real photos at their own resolution and on held-out phantom scenes per skin type.
+Loss: L = a * soft Dice + (1 - a) * BCE, the BCE weighted up near the outline. One-cycle AdamW, batches
+at several input sides. processing.segmentation.evaluate exports, tunes and scores the result.
 """
 
 from __future__ import annotations
 
-import hashlib
 import logging
-import os
-import platform
 import time
 from pathlib import Path
 
@@ -21,27 +18,42 @@ import numpy as np
 import torch
 from torch.nn import functional as F
 
-from processing.segmentation import datasets
-from processing.segmentation.network import BurnUNet, Probability
+from processing.segmentation import datasets, evaluate, passes
+from processing.segmentation.network import BurnUNet
 from processing.segmentation.scores import split_scores
-from processing.stages import write_json
 from schemas.errors import InvalidInput
-from schemas.segmentation import TrainingConfig, TrainingReport
+from schemas.segmentation import TrainingConfig
 
 log = logging.getLogger(__name__)
 
-MODEL = "burnseg.onnx"
-REPORT = "training_report.json"
+
+def wound_square(mask: np.ndarray, rng: np.random.Generator) -> tuple[int, int, int, int]:
+    """(y0, x0, height, width) of a square around the wound, tight or loose, as the fine pass sees it."""
+    ys, xs = np.nonzero(mask)
+    h, w = mask.shape
+    extent = max(ys.max() - ys.min(), xs.max() - xs.min()) + 1
+    side = int(np.clip(extent / rng.uniform(0.3, 0.9), 32, min(h, w)))
+    cy = (ys.min() + ys.max()) / 2 + rng.uniform(-0.15, 0.15) * side
+    cx = (xs.min() + xs.max()) / 2 + rng.uniform(-0.15, 0.15) * side
+    return int(np.clip(cy - side / 2, 0, h - side)), int(np.clip(cx - side / 2, 0, w - side)), side, side
 
 
-def augment(sample: datasets.Sample, size: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
-    """A random crop (scale and aspect), flips, quarter turns, exposure, colour and blur."""
-    rgb, mask = sample.rgb, sample.mask
+def random_crop(mask: np.ndarray, rng: np.random.Generator) -> tuple[int, int, int, int]:
+    """(y0, x0, height, width) of 55-100 % of the picture at an aspect of 0.78-1.28."""
     h, w = mask.shape
     scale = rng.uniform(0.55, 1.0)
     aspect = np.exp(rng.uniform(-0.25, 0.25))
     ch, cw = int(min(h, h * scale * aspect)), int(min(w, w * scale / aspect))
-    y0, x0 = int(rng.integers(0, h - ch + 1)), int(rng.integers(0, w - cw + 1))
+    return int(rng.integers(0, h - ch + 1)), int(rng.integers(0, w - cw + 1)), ch, cw
+
+
+def augment(
+    sample: datasets.Sample, size: int, rng: np.random.Generator, wound_crop_share: float = 0.0
+) -> tuple[np.ndarray, np.ndarray]:
+    """A crop (around the wound, or random in scale and aspect), flips, quarter turns, exposure, colour, blur."""
+    rgb, mask = sample.rgb, sample.mask
+    around_wound = sample.group == "real" and mask.any() and rng.random() < wound_crop_share
+    y0, x0, ch, cw = wound_square(mask, rng) if around_wound else random_crop(mask, rng)
     rgb = cv2.resize(rgb[y0 : y0 + ch, x0 : x0 + cw], (size, size), interpolation=cv2.INTER_AREA)
     mask = cv2.resize(mask[y0 : y0 + ch, x0 : x0 + cw], (size, size), interpolation=cv2.INTER_NEAREST)
     if rng.random() < 0.5:
@@ -58,79 +70,103 @@ def augment(sample: datasets.Sample, size: int, rng: np.random.Generator) -> tup
     return np.clip(x, 0, 1), np.ascontiguousarray(mask)
 
 
-def loss_fn(logits: torch.Tensor, target: torch.Tensor, a: float) -> torch.Tensor:
+def boundary_band(target: torch.Tensor, px: int) -> torch.Tensor:
+    """1 on pixels within px of the true outline (inside or out), else 0."""
+    dilated = F.max_pool2d(target, 2 * px + 1, stride=1, padding=px)
+    eroded = -F.max_pool2d(-target, 2 * px + 1, stride=1, padding=px)
+    return dilated - eroded
+
+
+def loss_fn(logits: torch.Tensor, target: torch.Tensor, conf: TrainingConfig) -> torch.Tensor:
+    """a * soft Dice + (1 - a) * BCE, the BCE weighted up near the outline."""
     p = torch.sigmoid(logits)
     inter = (p * target).sum(dim=(1, 2, 3))
     dice = 1 - (2 * inter + 1) / (p.sum(dim=(1, 2, 3)) + target.sum(dim=(1, 2, 3)) + 1)
-    return a * dice.mean() + (1 - a) * F.binary_cross_entropy_with_logits(logits, target)
+    weight = 1 + conf.boundary_weight * boundary_band(target, conf.boundary_band_px)
+    bce = F.binary_cross_entropy_with_logits(logits, target, weight=weight)
+    a = conf.dice_weight
+    return a * dice.mean() + (1 - a) * bce
 
 
-def predict(net: BurnUNet, rgb: np.ndarray, size: int) -> np.ndarray:
-    """Burn probability at the image's own resolution (the whole image resized to the input)."""
-    x = cv2.resize(rgb, (size, size), interpolation=cv2.INTER_AREA).astype(np.float32) / 255.0
-    with torch.no_grad():
-        p = torch.sigmoid(net(torch.from_numpy(x).permute(2, 0, 1)[None]))[0, 0].numpy()
-    return cv2.resize(p, (rgb.shape[1], rgb.shape[0]), interpolation=cv2.INTER_LINEAR)
+def torch_network(net: BurnUNet):
+    """The network as processing.segmentation.passes calls it: NCHW float32 in, (N, H, W) probability out."""
+
+    def network(x: np.ndarray) -> np.ndarray:
+        with torch.no_grad():
+            return torch.sigmoid(net(torch.from_numpy(x)))[:, 0].numpy()
+
+    return network
 
 
-def evaluate(net: BurnUNet, samples: list[datasets.Sample], size: int):
+def single_pass_dice(net: BurnUNet, samples: list[datasets.Sample], size: int) -> float:
+    """Pooled Dice of one pass over each whole image at threshold 0.5: the curve logged while training."""
     net.eval()
-    return split_scores([(predict(net, s.rgb, size) >= 0.5, s.mask.astype(bool)) for s in samples])
+    network = torch_network(net)
+    pairs = [(passes.run_network(network, s.rgb, size) >= 0.5, s.mask.astype(bool)) for s in samples]
+    return split_scores(pairs).dice_pooled or 0.0
 
 
 def batches(pool: list[datasets.Sample], conf: TrainingConfig, rng: np.random.Generator):
+    """Shuffled batches, each at one of conf.scales."""
     order = rng.permutation(len(pool))
     for i in range(0, len(order) - conf.batch_size + 1, conf.batch_size):
-        pairs = [augment(pool[j], conf.input_size, rng) for j in order[i : i + conf.batch_size]]
+        size = int(rng.choice(conf.scales))
+        pairs = [augment(pool[j], size, rng, conf.wound_crop_share) for j in order[i : i + conf.batch_size]]
         x = torch.from_numpy(np.stack([p[0] for p in pairs])).permute(0, 3, 1, 2).contiguous()
         y = torch.from_numpy(np.stack([p[1] for p in pairs]).astype(np.float32))[:, None]
         yield x, y
 
 
-def export(net: BurnUNet, conf: TrainingConfig, path: Path) -> None:
-    import onnx
+class Checkpoint:
+    """Everything a stopped run needs to go on exactly where it was: weights, optimiser, schedule,
+    random states, the curves and the time spent. Written whole after every epoch, then moved in place."""
 
-    net.eval()
-    dummy = torch.rand(1, 3, conf.input_size, conf.input_size)
-    tmp = path.with_name(path.name + ".tmp")
-    torch.onnx.export(
-        Probability(net),
-        dummy,
-        str(tmp),
-        input_names=["image"],
-        output_names=["probability"],
-        dynamic_axes={"image": {0: "n"}, "probability": {0: "n"}},
-        opset_version=17,
-        dynamo=False,
-    )
-    model = onnx.load(str(tmp))
-    meta = {
-        "input_size": str(conf.input_size),
-        "input": "RGB float32 in [0, 1], NCHW",
-        "output": "burn probability per pixel",
-        "license": "CC BY-NC 4.0 (trained on FUSeg 2021 photos)",
-        "card": "docs/segmentation-model.md",
-    }
-    for key, value in meta.items():
-        model.metadata_props.add(key=key, value=value)
-    onnx.save(model, str(tmp))
-    tmp.replace(path)  # a crash never leaves a half-written model where a good one was
+    def __init__(self, path: Path, conf: TrainingConfig):
+        self.path, self.conf = path, conf
+
+    def save(self, net, opt, sched, rng: np.random.Generator, state: dict) -> None:
+        tmp = self.path.with_name(self.path.name + ".tmp")
+        torch.save(
+            {
+                "recipe": msgspec.json.encode(self.conf).decode(),
+                "model": net.state_dict(),
+                "optimizer": opt.state_dict(),
+                "scheduler": sched.state_dict(),
+                "numpy_rng": rng.bit_generator.state,
+                "torch_rng": torch.get_rng_state(),
+                **state,
+            },
+            tmp,
+        )
+        tmp.replace(self.path)
+
+    def load(self, net, opt, sched, rng: np.random.Generator) -> dict:
+        """The saved progress ({} when there is no checkpoint); refuses one made with another recipe."""
+        if not self.path.exists():
+            return {}
+        saved = torch.load(self.path, weights_only=False)
+        if saved["recipe"] != msgspec.json.encode(self.conf).decode():
+            raise InvalidInput(
+                f"{self.path} was made with another recipe; continue it with that recipe, or train into "
+                "another --out folder"
+            )
+        net.load_state_dict(saved["model"])
+        opt.load_state_dict(saved["optimizer"])
+        sched.load_state_dict(saved["scheduler"])
+        rng.bit_generator.state = saved["numpy_rng"]
+        torch.set_rng_state(saved["torch_rng"])
+        return {k: saved[k] for k in ("epoch", "loss_history", "tune_history", "train_seconds")}
 
 
-def run(conf: TrainingConfig, real_root: Path, out_dir: Path, cache_dir: Path) -> Path:
+def train(
+    conf: TrainingConfig, real: dict, synthetic: dict, out_dir: Path, stop_after: int | None = None
+) -> tuple[BurnUNet, dict]:
+    """Trains (or continues a stopped run in out_dir) and returns the network and its progress;
+    stop_after ends this run after that many epochs in all (the checkpoint continues it later)."""
     torch.manual_seed(conf.seed)
     torch.set_num_threads(conf.threads)
     rng = np.random.default_rng(conf.seed)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    real_train, real_val = datasets.real_samples(real_root, conf.validation_percent)
-    syn_train, syn_val = datasets.synthetic_samples(datasets.render_scenes(conf, cache_dir), conf)
-    log.info(
-        "real %d train / %d held out; synthetic %d train / %d held out",
-        len(real_train),
-        len(real_val),
-        len(syn_train),
-        len(syn_val),
-    )
+    real_train, syn_train = real["train"], synthetic["train"]
     net = BurnUNet(tuple(conf.widths))
     per_epoch = (len(real_train) + min(conf.synthetic_per_epoch, len(syn_train))) // conf.batch_size
     if per_epoch == 0:
@@ -142,51 +178,51 @@ def run(conf: TrainingConfig, real_root: Path, out_dir: Path, cache_dir: Path) -
     sched = torch.optim.lr_scheduler.OneCycleLR(
         opt, conf.learning_rate, total_steps=per_epoch * conf.epochs, pct_start=0.1
     )
-    history, started = [], time.monotonic()
-    for epoch in range(conf.epochs):
+    out_dir.mkdir(parents=True, exist_ok=True)
+    checkpoint = Checkpoint(out_dir / "checkpoint.pt", conf)
+    state = {"epoch": 0, "loss_history": [], "tune_history": [], "train_seconds": 0.0}
+    state |= checkpoint.load(net, opt, sched, rng)
+    if state["epoch"]:
+        log.info("continuing %s after epoch %d of %d", checkpoint.path, state["epoch"], conf.epochs)
+    while state["epoch"] < min(conf.epochs, stop_after or conf.epochs):
+        started = time.monotonic()
         net.train()
-        extra = (
-            [
-                syn_train[i]
-                for i in rng.choice(len(syn_train), min(conf.synthetic_per_epoch, len(syn_train)), replace=False)
-            ]
-            if syn_train
-            else []
-        )
+        picked = rng.choice(len(syn_train), min(conf.synthetic_per_epoch, len(syn_train)), replace=False)
         losses = []
-        for step, (x, y) in enumerate(batches(real_train + extra, conf, rng)):
+        for step, (x, y) in enumerate(batches(real_train + [syn_train[i] for i in picked], conf, rng)):
             if step >= per_epoch:
                 break
-            loss = loss_fn(net(x), y, conf.dice_weight)
+            loss = loss_fn(net(x), y, conf)
             opt.zero_grad()
             loss.backward()
             opt.step()
             sched.step()
             losses.append(loss.item())
-        history.append(float(np.mean(losses)))
-        log.info("epoch %d/%d loss %.4f (%.0f s)", epoch + 1, conf.epochs, history[-1], time.monotonic() - started)
-        torch.save(net.state_dict(), out_dir / "checkpoint.pt")
-    train_seconds = time.monotonic() - started
-    model_path = out_dir / MODEL
-    export(net, conf, model_path)
-    by_tone = {
-        tone.value: evaluate(net, [s for s in syn_val if s.group == tone.value], conf.input_size)
-        for tone in datasets.TONES
-    }
-    report = TrainingReport(
-        config=conf,
-        model_file=MODEL,
-        model_sha256=hashlib.sha256(model_path.read_bytes()).hexdigest(),
-        parameters=sum(p.numel() for p in net.parameters()),
-        epochs_run=conf.epochs,
-        train_seconds=round(train_seconds, 1),
-        machine=f"{platform.processor() or platform.machine()}, {conf.threads} of {os.cpu_count()} threads",
-        real_train_images=len(real_train),
-        real_validation=evaluate(net, real_val, conf.input_size),
-        synthetic_train_crops=len(syn_train),
-        synthetic_validation=evaluate(net, syn_val, conf.input_size),
-        synthetic_by_tone=by_tone,
-        loss_history=[round(v, 5) for v in history],
+        state["epoch"] += 1
+        state["loss_history"].append(round(float(np.mean(losses)), 5))
+        state["tune_history"].append(single_pass_dice(net, real["tune"], conf.input_size))
+        state["train_seconds"] += time.monotonic() - started
+        log.info(
+            "epoch %d/%d loss %.4f, tuning Dice %.3f (%.0f s in all)",
+            state["epoch"],
+            conf.epochs,
+            state["loss_history"][-1],
+            state["tune_history"][-1],
+            state["train_seconds"],
+        )
+        checkpoint.save(net, opt, sched, rng, state)
+    net.eval()
+    return net, state
+
+
+def run(conf: TrainingConfig, real_root: Path, out_dir: Path, cache_dir: Path) -> Path:
+    out_dir.mkdir(parents=True, exist_ok=True)
+    real = datasets.real_samples(real_root, conf.validation_percent, conf.tune_percent)
+    synthetic = datasets.synthetic_samples(datasets.render_scenes(conf, cache_dir), conf)
+    log.info(
+        "real photos %s; phantom crops %s",
+        {k: len(v) for k, v in real.items()},
+        {k: len(v) for k, v in synthetic.items()},
     )
-    write_json(out_dir / REPORT, msgspec.to_builtins(report))
-    return out_dir / REPORT
+    net, state = train(conf, real, synthetic, out_dir)
+    return evaluate.run(conf, net, state, real, synthetic, out_dir)
