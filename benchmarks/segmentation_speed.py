@@ -25,6 +25,7 @@ import msgspec
 import numpy as np
 
 from processing.segmentation.infer import SHIPPED_MODEL, Box, BurnSegmenter
+from schemas.segmentation import PassSettings
 
 SHARED = Path(__file__).resolve().parents[2] / "shared"
 
@@ -38,15 +39,16 @@ def timed(fn, repeat: int) -> float:
     return min(best) * 1000
 
 
-def measure(photos: list[Path], segmenter: BurnSegmenter, repeat: int, crop: bool) -> dict:
-    read_ms, model_ms = [], []
+def measure(photos: list[Path], segmenter: BurnSegmenter, one_pass: BurnSegmenter, repeat: int, crop: bool) -> dict:
+    read_ms, model_ms, one_ms = [], [], []
     for photo in photos:
         read_ms.append(timed(lambda p=photo: cv2.imread(str(p)), repeat))
         rgb = cv2.cvtColor(cv2.imread(str(photo)), cv2.COLOR_BGR2RGB)
         h, w = rgb.shape[:2]
         box = Box.around(w / 2, h / 2, min(h, w) / 3, w, h) if crop else None
         model_ms.append(timed(lambda r=rgb, b=box: segmenter.probability(r, b), repeat))
-    read, model = statistics.median(read_ms), statistics.median(model_ms)
+        one_ms.append(timed(lambda r=rgb, b=box: one_pass.probability(r, b), repeat))
+    read, model, one = statistics.median(read_ms), statistics.median(model_ms), statistics.median(one_ms)
     return {
         "photos": len(photos),
         "size": f"{w}x{h}",
@@ -55,6 +57,8 @@ def measure(photos: list[Path], segmenter: BurnSegmenter, repeat: int, crop: boo
         "model_ms_p90": round(float(np.percentile(model_ms, 90)), 1),
         "read_photo_ms_median": round(read, 1),
         "model_over_read": round(model / read, 2),
+        "one_pass_192_ms_median": round(one, 1),
+        "model_over_one_pass": round(model / one, 2),
     }
 
 
@@ -69,7 +73,11 @@ def main() -> None:
         (sorted((SHARED / "datasets" / "fuseg2021-train" / "images").glob("*.jpg"))[: args.count], False),
         (sorted((SHARED / "phantoms" / "p1_forearm" / "images").glob("*.jpg"))[: args.count], True),
     ]
-    rows = [measure(photos, segmenter, args.repeat, crop) for photos, crop in sets if photos]
+    # Same-run baseline: the same model run as the earlier one was, one pass over the region at 192 (23.5 ms
+    # per view on this machine when it was quiet, 2026-11-22).
+    single = PassSettings(coarse_size=192, fine_size=192, threshold=0.5, fine_pass=False)
+    one_pass = BurnSegmenter(SHIPPED_MODEL, threads=1, settings=single)
+    rows = [measure(photos, segmenter, one_pass, args.repeat, crop) for photos, crop in sets if photos]
     report = {
         "date": dt.date.today().isoformat(),
         "machine": f"{platform.processor() or platform.machine()}, pinned to 1 core",

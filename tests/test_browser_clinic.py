@@ -15,6 +15,7 @@ import pytest
 from harness.browser import DESKTOP, PHONE, TABLET, browser_missing, distinct_colours, launch, shot
 from harness.processes import PASSWORD
 from harness.sites import Sites, cli
+from processing.segmentation.infer import SHIPPED_MODEL, BurnSegmenter
 
 pytestmark = pytest.mark.skipif(bool(browser_missing()), reason=browser_missing() or "browser present")
 
@@ -171,6 +172,8 @@ def test_the_clinicians_flow_end_to_end_and_the_consultants_advice_back(sites, b
     page.wait_for_selector("#result", timeout=ANALYSIS_TIMEOUT_MS)
     assert "geometry, not burn depth" in page.inner_text("#metrics")
     assert "cm²" in page.inner_text("#metrics")
+    version = BurnSegmenter(SHIPPED_MODEL).metadata["version"]
+    assert f"model {version}" in page.inner_text("main")  # which model outlined the burn, with its card
     shot(page, "07-analysis-result-loading")
     # The viewer loads its model when it scrolls into view (a phone should not fetch it otherwise).
     page.locator("model-viewer").scroll_into_view_if_needed()
@@ -214,6 +217,7 @@ def test_the_clinicians_flow_end_to_end_and_the_consultants_advice_back(sites, b
     assert pdf.read_bytes()[:5] == b"%PDF-"
     text = pdf_text(pdf)
     assert "Diallo" in text and "7.1" in text
+    assert f"segmentation model {version}" in " ".join(text.split())  # the model section names the model
 
     page.goto(encounter_url)
     page.get_by_role("button", name="Send to the burn center").click()

@@ -30,7 +30,7 @@ B_SCALE = -2.0
 B_VIEWS = 2.0
 UNSCALED_PENALTY = 5.0
 """An unscaled result is only a shape: subtract this from z."""
-CUT_OFF_PENALTY = 2.0
+CUT_OFF_PENALTY = 2.5
 """The burn reaches the edge of what was reconstructed or looked at: part of it may be missing."""
 
 

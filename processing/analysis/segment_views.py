@@ -112,7 +112,7 @@ def _model_mask(
     0.5), and the ViewMask fields that say how sure the outline is."""
     two = segmenter.segment(rgb, box)
     threshold = segmenter.settings.threshold
-    prob = passes.rescaled(two.probability, threshold)
+    prob = passes.rescaled(two.probability, threshold, box)
     mask = prob >= 0.5
     extra = {"probability": f"probability/{stem}.png"}
     _write(tmp / extra["probability"], np.round(prob * 255).astype(np.uint8))

@@ -83,4 +83,4 @@ class BurnSegmenter:
     def probability(self, rgb: np.ndarray, region: Box | None = None) -> np.ndarray:
         """Burn probability (H, W) float32, rescaled so burn is >= 0.5 whatever threshold the model was
         tuned to; 0 outside what the passes looked at."""
-        return passes.rescaled(self.segment(rgb, region).probability, self.settings.threshold)
+        return passes.rescaled(self.segment(rgb, region).probability, self.settings.threshold, region)

@@ -56,14 +56,20 @@ class TwoPass:
     """Where the second pass looked (None: it did not run, no burn was found or it is switched off)."""
 
 
-def rescaled(prob: np.ndarray, threshold: float) -> np.ndarray:
+def rescaled(prob: np.ndarray, threshold: float, within: Square | None = None) -> np.ndarray:
     """Probability mapped piecewise linearly so the model's own threshold sits at 0.5: everything after
-    the segmentation (fusion on the surface, the burn/no-burn cut at 0.5) then cuts where the model does."""
+    the segmentation (fusion on the surface, the burn/no-burn cut at 0.5) then cuts where the model does.
+    `within`: only that square can be non-zero (0 stays 0), so only it is mapped."""
     if threshold == 0.5:
         return prob
-    low = prob / (2 * threshold)
-    high = 0.5 + (prob - threshold) / (2 * (1 - threshold))
-    return np.where(prob < threshold, low, high).astype(np.float32)
+    if within is not None:
+        out = prob.copy()
+        within.cut(out)[:] = rescaled(within.cut(prob), threshold)
+        return out
+    out = prob * np.float32(0.5 / threshold)
+    high = prob >= threshold
+    out[high] = 0.5 + (prob[high] - threshold) * np.float32(0.5 / (1 - threshold))
+    return out.astype(np.float32, copy=False)
 
 
 def run_network(network: Network, rgb: np.ndarray, side: int) -> np.ndarray:
@@ -88,13 +94,14 @@ def burn_extent(mask: np.ndarray) -> tuple[int, int, int, int] | None:
     return int(x0), int(y0), int(x1), int(y1)
 
 
-def fine_square(mask: np.ndarray, region: Square, fine_size: int) -> Square | None:
-    """The square the second pass looks at, inside the picture, around the burn the first pass found."""
+def fine_square(mask: np.ndarray, region: Square, fine_size: int, shape: tuple[int, int]) -> Square | None:
+    """The square the second pass looks at, inside the picture of `shape`, around the burn the first pass
+    found in `mask` (the region's own pixels)."""
     extent = burn_extent(mask)
     if extent is None:
         return None
-    x0, y0, x1, y1 = extent
-    h, w = mask.shape
+    x0, y0, x1, y1 = (v + o for v, o in zip(extent, (region.x0, region.y0) * 2, strict=True))
+    h, w = shape
     radius = max(x1 - x0, y1 - y0, 8) / FINE_FILL / 2
     square = Square.around((x0 + x1) / 2, (y0 + y1) / 2, radius, w, h)
     if square.side >= 0.9 * region.side and fine_size <= region.side:
@@ -112,7 +119,8 @@ def segment(network: Network, rgb: np.ndarray, region: Square | None, settings: 
         region = Square(0, 0, max(h, w))
     else:
         region.cut(coarse)[:] = run_network(network, region.cut(rgb), settings.coarse_size)
-    square = fine_square(coarse >= settings.threshold, region, settings.fine_size) if settings.fine_pass else None
+    found = region.cut(coarse) >= settings.threshold
+    square = fine_square(found, region, settings.fine_size, (h, w)) if settings.fine_pass else None
     prob = coarse.copy()
     if square is not None:
         square.cut(prob)[:] = run_network(network, square.cut(rgb), settings.fine_size)
