@@ -19,12 +19,12 @@ import numpy as np
 from processing.analysis import outline_checks
 from processing.reconstruction.views import read_rgb
 from processing.segmentation import passes
-from processing.segmentation.infer import Box, BurnSegmenter
+from processing.segmentation.infer import Box, BurnSegmenter, fairness_of
 from processing.stages import fresh_dir, publish_dir, write_json
 from schemas.analysis import ModelSummary, SegmentationRecord, ViewMask
 from schemas.config import AnalysisConfig
 from schemas.errors import InvalidInput
-from schemas.segmentation import FairnessTable, MaskSource
+from schemas.segmentation import MaskSource
 
 log = logging.getLogger(__name__)
 
@@ -126,16 +126,11 @@ def _model_mask(
 
 def model_summary(segmenter: BurnSegmenter) -> ModelSummary:
     """What the segmentation record keeps of the model: version, hash, threshold, fairness table."""
-    table = segmenter.metadata.get("fairness")
-    try:
-        fairness = msgspec.json.decode(table, type=FairnessTable) if table else None
-    except msgspec.ValidationError:
-        fairness = None  # a model trained with another table layout: its fairness is not known here
     return ModelSummary(
         version=segmenter.metadata.get("version", ""),
         sha256=segmenter.sha256,
         threshold=segmenter.settings.threshold,
-        fairness=fairness,
+        fairness=fairness_of(segmenter.metadata),
     )
 
 

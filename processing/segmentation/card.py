@@ -6,8 +6,8 @@ from pathlib import Path
 
 import msgspec
 
-from processing.segmentation.infer import BurnSegmenter
-from schemas.segmentation import FairnessTable, ModelInfo, TrainingReport
+from processing.segmentation.infer import BurnSegmenter, fairness_of
+from schemas.segmentation import ModelInfo, TrainingReport
 
 REPORT = "training_report.json"
 
@@ -16,10 +16,6 @@ def model_info(model: str | Path = "") -> ModelInfo:
     """The model's card from its ONNX metadata and, when it lies beside the model, its training report."""
     segmenter = BurnSegmenter(model)
     meta = segmenter.metadata
-    try:
-        fairness = msgspec.json.decode(meta["fairness"], type=FairnessTable) if "fairness" in meta else None
-    except msgspec.ValidationError:
-        fairness = None  # stamped by a version of burnedge with another table layout
     report = None
     beside = segmenter.path.parent / REPORT
     if beside.is_file():
@@ -36,7 +32,7 @@ def model_info(model: str | Path = "") -> ModelInfo:
         license=meta.get("license", ""),
         card=meta.get("card", ""),
         passes=segmenter.settings,
-        fairness=fairness,
+        fairness=fairness_of(meta),
         real_validation=report.real_validation if report else None,
         synthetic_validation=report.synthetic_validation if report else None,
     )

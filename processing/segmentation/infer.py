@@ -10,6 +10,7 @@ from __future__ import annotations
 import hashlib
 from pathlib import Path
 
+import msgspec
 import numpy as np
 import onnxruntime as ort
 
@@ -17,7 +18,7 @@ from processing.segmentation import passes
 from processing.segmentation.passes import Square as Box
 from processing.segmentation.passes import TwoPass
 from schemas.errors import InvalidInput, plain
-from schemas.segmentation import PassSettings
+from schemas.segmentation import FairnessTable, PassSettings
 
 SHIPPED_MODEL = Path(__file__).parent / "models" / "burnseg.onnx"
 
@@ -49,6 +50,15 @@ def settings_of(meta: dict[str, str]) -> PassSettings:
         raise InvalidInput(
             f"the segmentation model's metadata is not understood ({exc}); retrain or re-export it"
         ) from exc
+
+
+def fairness_of(meta: dict[str, str]) -> FairnessTable | None:
+    """The held-out Dice by skin tone a model file carries; None for a model from before it was measured,
+    or one stamped with another table layout (its fairness is not known here)."""
+    try:
+        return msgspec.json.decode(meta["fairness"], type=FairnessTable) if "fairness" in meta else None
+    except msgspec.ValidationError:
+        return None
 
 
 class BurnSegmenter:
