@@ -124,10 +124,11 @@ class ViewMask(Frozen):
     """8-bit PNG of the model's probability (empty for a person's mask)."""
     overlay: str = ""
     crop: list[int] | None = None
-    """[x0, y0, side] of the square the model looked at (pixels as stored); None: the whole picture or a person's
-    mask. Outside it the view says nothing (it is not counted as healthy skin)."""
+    """[x0, y0, side] of the square the model looked at first (pixels as stored); None: the whole picture or a
+    person's mask. Outside it and fine_square the view says nothing (it is not counted as healthy skin)."""
     burn_at_crop_edge: bool = False
-    """The model's burn touches the edge of its square: the burn may continue beyond what it looked at."""
+    """The model's burn touches the edge of what it looked at (crop and fine_square together): the burn may
+    continue beyond it."""
     fine_square: list[int] | None = None
     """[x0, y0, side] of the model's second, closer look around the burn; None when it did not run."""
     pass_disagreement: float | None = None

@@ -10,6 +10,24 @@ import msgspec
 from schemas.base import Frozen, Message
 
 
+class HealedStage(Message):
+    """A second, shorter training stage that starts from the first stage's weights and adds phantom burns far
+    into healing (pale pink, re-epithelialising), a look the first stage's data barely has: without it, a
+    burn three weeks on is not found at all."""
+
+    epochs: Annotated[int, msgspec.Meta(ge=1)] = 16
+    """Passes over the real photos' training split in this stage."""
+    learning_rate: Annotated[float, msgspec.Meta(gt=0)] = 1e-3
+    """Peak AdamW learning rate of this stage's own one-cycle schedule."""
+    scenes: Annotated[int, msgspec.Meta(ge=0)] = 36
+    """Extra phantom scenes rendered for this stage, split as the first stage's are (validation, tuning,
+    training), their indices following on from the first stage's."""
+    healing_min: Annotated[float, msgspec.Meta(ge=0, le=1)] = 0.55
+    """Least healing of the extra scenes (0 fresh, 1 healed skin colour)."""
+    healing_max: Annotated[float, msgspec.Meta(ge=0, le=1)] = 0.95
+    """Most healing of the extra scenes."""
+
+
 class TrainingConfig(Message):
     """Everything `burnedge train-segmentation` reads; the same config and data give the same model."""
 
@@ -70,6 +88,8 @@ class TrainingConfig(Message):
     """Resamples of the held-out images for the 95 % intervals of the fairness table."""
     threads: Annotated[int, msgspec.Meta(ge=1)] = 2
     """CPU threads torch may use."""
+    healed_stage: HealedStage | None = msgspec.field(default_factory=HealedStage)
+    """The second stage (None: one stage only); the first stage's checkpoint does not depend on it."""
 
 
 class SplitScores(Frozen):

@@ -7,7 +7,7 @@ import cv2
 import numpy as np
 import pytest
 
-from processing.analysis import confidence, fusion, outline_checks, outline_evidence
+from processing.analysis import confidence, fusion, outline_checks, outline_evidence, segment_views
 from processing.segmentation import fairness, passes, skin_tone
 from schemas.analysis import ModelSummary, OutlineEvidence, SegmentationRecord, ViewMask
 from schemas.segmentation import FairnessTable, GroupScore, MaskSource, PassSettings
@@ -60,6 +60,28 @@ def test_rescaling_puts_the_models_threshold_at_one_half():
     assert np.all(np.diff(q) >= 0) and q[0] == 0 and q[-1] == pytest.approx(1)
     np.testing.assert_array_equal(q >= 0.5, p >= 0.35)
     assert passes.rescaled(p, 0.5) is p
+
+
+def test_a_burn_past_the_first_square_is_seen_whole_by_the_second_and_not_called_cut_off():
+    rgb, truth = skin_picture(size=600, burn_radius=40, centre=(300, 300))
+    settings = PassSettings(coarse_size=64, fine_size=96, threshold=0.4, fine_pass=True)
+    region = passes.Square(300 - 20, 200, 200)  # the aim was off: the burn's left part is outside the region
+    two = passes.segment(red_finder, rgb, region, settings)
+    assert two.fine_square is not None and two.fine_square.x0 < region.x0
+    rows, cols = two.looked_at()
+    assert cols.start == two.fine_square.x0 and rows.stop >= region.y0 + region.side
+    prob = passes.rescaled(two.probability, settings.threshold, two.looked_at())
+    np.testing.assert_array_equal(prob >= 0.5, two.probability >= settings.threshold)
+    found = prob >= 0.5
+    assert found[~two.seen()].sum() == 0 and (found & truth).sum() > 0.95 * truth.sum()
+    assert not segment_views._edge_touched(found, two.seen())
+
+    only_first = np.zeros_like(found)
+    region.cut(only_first)[:] = True
+    assert segment_views._edge_touched(found & only_first, only_first)  # cut where the look ends
+    corner = np.zeros_like(found)
+    corner[:50, :50] = True  # the picture's own edge is not the edge of the look
+    assert not segment_views._edge_touched(corner, np.ones_like(found))
 
 
 @pytest.mark.parametrize(

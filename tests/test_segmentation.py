@@ -14,7 +14,7 @@ from processing.segmentation.infer import SHIPPED_MODEL, BurnSegmenter
 from processing.segmentation.scores import dice_iou, split_scores
 from processing.segmentation.skin_tone import CATEGORIES
 from schemas.errors import InvalidInput
-from schemas.segmentation import FairnessTable, TrainingConfig, TrainingReport
+from schemas.segmentation import FairnessTable, HealedStage, TrainingConfig, TrainingReport
 from tests.conftest import SHARED
 
 FUSEG = SHARED / "datasets" / "fuseg2021-train"
@@ -63,6 +63,19 @@ def test_training_scenes_cover_every_skin_type_and_burn_look():
     assert datasets.phantom_spec(7, conf) == specs[7]
 
 
+def test_the_healed_stage_adds_scenes_far_into_healing_and_leaves_the_first_stage_as_it_was():
+    conf = TrainingConfig()
+    stage = conf.healed_stage
+    first = [datasets.phantom_spec(i, conf) for i in range(conf.synthetic_scenes)]
+    assert first == [datasets.phantom_spec(i, TrainingConfig(healed_stage=None)) for i in range(len(first))]
+    healed = [datasets.phantom_spec(i, conf) for i in range(len(first), datasets.scene_count(conf))]
+    assert len(healed) == stage.scenes and {s.tone for s in healed} == set(datasets.TONES)
+    assert all(stage.healing_min <= s.healing <= stage.healing_max for s in healed)
+    assert max(s.healing for s in first) <= 0.6 < max(s.healing for s in healed)
+    split = [datasets.scene_split(i) for i in range(len(first), datasets.scene_count(conf))]
+    assert {"validation", "tune", "train"} == set(split)  # some healed scenes are scored, never trained on
+
+
 def test_the_shipped_model_says_what_it_is_how_it_runs_and_how_it_does_by_skin_tone():
     assert SHIPPED_MODEL.stat().st_size <= 25 * 2**20
     segmenter = BurnSegmenter(SHIPPED_MODEL)
@@ -109,6 +122,7 @@ TINY = dict(
     thresholds=[0.4, 0.5],
     bootstrap_draws=200,
     threads=1,
+    healed_stage=HealedStage(epochs=1, scenes=0),
 )
 
 
@@ -122,7 +136,7 @@ def test_a_tiny_training_run_exports_a_model_onnxruntime_can_run(tmp_path: Path)
     report = msgspec.json.decode(
         run(conf, data, tmp_path / "out", tmp_path / "cache").read_bytes(), type=TrainingReport
     )
-    assert report.epochs_run == 1 and report.real_validation.images >= 1 and report.real_tune_images >= 1
+    assert report.epochs_run == 2 and report.real_validation.images >= 1 and report.real_tune_images >= 1
     assert len(report.trials) == 2 * 2 + 1  # one pass or two, at two thresholds; then the flips
     segmenter = BurnSegmenter(tmp_path / "out" / report.model_file)
     assert segmenter.settings == report.passes and segmenter.metadata["version"] == report.model_version
@@ -135,15 +149,17 @@ def test_a_stopped_training_run_continues_to_the_same_weights(tmp_path: Path):
     from processing.segmentation.train import train
 
     data = tiny_dataset(tmp_path / "data")
-    conf = TrainingConfig(epochs=3, **TINY)
+    conf = TrainingConfig(epochs=2, **TINY | {"healed_stage": HealedStage(epochs=2, scenes=0)})
     real = datasets.real_samples(data, conf.validation_percent, conf.tune_percent)
     synthetic = {"train": [], "tune": [], "validation": []}
     whole, whole_state = train(conf, real, synthetic, tmp_path / "whole")
-    _, first = train(conf, real, synthetic, tmp_path / "parts", stop_after=1)
-    assert first["epoch"] == 1
+    assert whole_state["epoch"] == 4
+    for stop in (1, 3):  # within the first stage, then within the healed stage
+        _, part = train(conf, real, synthetic, tmp_path / "parts", stop_after=stop)
+        assert part["epoch"] == stop
     resumed, state = train(conf, real, synthetic, tmp_path / "parts")
-    assert state["epoch"] == 3 and state["loss_history"] == whole_state["loss_history"]
+    assert state["epoch"] == 4 and state["loss_history"] == whole_state["loss_history"]
     for a, b in zip(whole.state_dict().values(), resumed.state_dict().values(), strict=True):
         assert torch.equal(a, b)
     with pytest.raises(InvalidInput, match="another recipe"):
-        train(TrainingConfig(epochs=4, **TINY), real, synthetic, tmp_path / "parts")
+        train(msgspec.structs.replace(conf, epochs=3), real, synthetic, tmp_path / "parts")

@@ -30,11 +30,14 @@ def pass_disagreement(two: TwoPass, threshold: float) -> float | None:
     """1 - Dice of the first pass's mask against the final one; None when the second pass did not run."""
     if two.fine_square is None:
         return None
-    first, final = two.coarse >= threshold, two.probability >= threshold
-    total = float(first.sum() + final.sum())
+    first = two.coarse >= threshold  # 0 outside the region
+    in_region = two.probability if two.region is None else two.region.cut(two.probability)
+    window = two.looked_at()
+    final_sum = np.count_nonzero((two.probability if window is None else two.probability[window]) >= threshold)
+    total = float(np.count_nonzero(first) + final_sum)
     if total == 0:
         return None
-    return round(1 - 2 * float(np.logical_and(first, final).sum()) / total, 4)
+    return round(1 - 2 * float(np.count_nonzero(first & (in_region >= threshold))) / total, 4)
 
 
 def uncertain_band_px(prob: np.ndarray, threshold: float, model_px: float) -> float | None:

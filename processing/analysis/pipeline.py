@@ -220,7 +220,8 @@ def _result(
     if cut_views:
         notes.append(
             f"the model's burn reaches the edge of the area it looked at in {', '.join(cut_views)}: "
-            "check the overlays; draw the outline (--masks) if the burn is larger"
+            "check the outlines on those photos; if the burn is larger, draw its outline on the photos "
+            "(a person's outline replaces the model's) and analyse again"
         )
     if measured.relief_note:
         notes.append(measured.relief_note)

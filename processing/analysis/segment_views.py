@@ -87,22 +87,18 @@ def _given_stem(name: str, given: set[str]) -> str | None:
     return next((s for s in (stem, Path(stem).stem) if s in given), None)
 
 
-def _edge_touched(mask: np.ndarray, box: Box) -> bool:
-    """Whether the largest burn region reaches a side of the crop that is not also the picture's own edge
-    (specks elsewhere in the square, on the drape say, do not count)."""
+def _edge_touched(mask: np.ndarray, seen: np.ndarray) -> bool:
+    """Whether the largest burn region reaches the edge of what the model looked at (`seen`: its first
+    square and its second, which may reach past the first) where that is not also the picture's own edge
+    (specks elsewhere, on the drape say, do not count)."""
     count, labels, stats, _ = cv2.connectedComponentsWithStats(mask.astype(np.uint8), connectivity=8)
     if count < 2:
         return False
-    mask = labels == 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
-    h, w = mask.shape
-    y1, x1 = box.y0 + box.side - 1, box.x0 + box.side - 1
-    sides = [
-        (box.y0 > 0, mask[box.y0, box.x0 : x1 + 1]),
-        (y1 < h - 1, mask[y1, box.x0 : x1 + 1]),
-        (box.x0 > 0, mask[box.y0 : y1 + 1, box.x0]),
-        (x1 < w - 1, mask[box.y0 : y1 + 1, x1]),
-    ]
-    return any(inner and line.any() for inner, line in sides)
+    burn = labels == 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
+    inside = seen.astype(np.uint8)
+    # pixels outside the picture count as seen, so its own edge is never the edge of the look
+    eroded = cv2.erode(inside, np.ones((3, 3), np.uint8), borderType=cv2.BORDER_CONSTANT, borderValue=1)
+    return bool((burn & (inside > eroded)).any())
 
 
 def _model_mask(
@@ -112,16 +108,16 @@ def _model_mask(
     0.5), and the ViewMask fields that say how sure the outline is."""
     two = segmenter.segment(rgb, box)
     threshold = segmenter.settings.threshold
-    prob = passes.rescaled(two.probability, threshold, box)
+    checks = outline_checks.view_checks(rgb, two, threshold, box, segmenter.settings.fine_size)
+    prob = passes.rescaled(two.probability, threshold, two.looked_at(), in_place=True)
     mask = prob >= 0.5
     extra = {"probability": f"probability/{stem}.png"}
     _write(tmp / extra["probability"], np.round(prob * 255).astype(np.uint8))
     if box is not None:
-        extra |= {"crop": [box.x0, box.y0, box.side], "burn_at_crop_edge": _edge_touched(mask, box)}
+        extra |= {"crop": [box.x0, box.y0, box.side], "burn_at_crop_edge": _edge_touched(mask, two.seen())}
     if two.fine_square is not None:
         extra["fine_square"] = [two.fine_square.x0, two.fine_square.y0, two.fine_square.side]
-    extra |= outline_checks.view_checks(rgb, two, threshold, box, segmenter.settings.fine_size)
-    return mask, MaskSource.model, extra
+    return mask, MaskSource.model, extra | checks
 
 
 def model_summary(segmenter: BurnSegmenter) -> ModelSummary:

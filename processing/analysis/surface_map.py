@@ -62,16 +62,16 @@ def crop_boxes(views: list[View], centre: np.ndarray, radius: float) -> dict[str
 
 def read_probability(seg_dir: Path, record: ViewMask, view: View) -> np.ndarray:
     """The view's probability in the undistorted picture: a person's mask counts as 0/1; NaN where nobody
-    looked (outside the model's crop, or outside the sensor)."""
+    looked (outside both of the model's squares, or outside the sensor)."""
     path = seg_dir / (record.probability or record.mask)
     image = cv2.imread(str(path), cv2.IMREAD_GRAYSCALE)
     if image is None:
         raise InvalidInput(f"{path} is missing or unreadable; run the analysis again with --fresh")
     prob = image.astype(np.float32) / 255.0
     if record.crop is not None:
-        x0, y0, side = record.crop
         looked = np.full_like(prob, np.nan)
-        looked[y0 : y0 + side, x0 : x0 + side] = prob[y0 : y0 + side, x0 : x0 + side]
+        for x0, y0, side in filter(None, (record.crop, record.fine_square)):
+            looked[y0 : y0 + side, x0 : x0 + side] = prob[y0 : y0 + side, x0 : x0 + side]
         prob = looked
     return view.undistort_image(prob, outside=np.nan)
 

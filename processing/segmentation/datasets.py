@@ -5,7 +5,8 @@ file name puts each photo in the validation split (never trained or tuned on), t
 the threshold and the passes) or training, so the splits never change.
 Synthetic: phantom scenes rendered by `processing.phantom` across skin types, burn looks, body parts,
 healing and crater depth; every fifth scene is held out whole and every tenth from the sixth on is kept
-for tuning (no view of either is trained on).
+for tuning (no view of either is trained on). The second training stage's scenes follow on from the
+first's in the same numbering, far into healing.
 """
 
 from __future__ import annotations
@@ -88,10 +89,16 @@ def real_samples(root: Path, percent: int, tune_percent: int = 0) -> dict[str, l
     return splits
 
 
+def scene_count(conf: TrainingConfig) -> int:
+    """Scenes of both stages: the first stage's come first."""
+    return conf.synthetic_scenes + (conf.healed_stage.scenes if conf.healed_stage else 0)
+
+
 def phantom_spec(index: int, conf: TrainingConfig) -> PhantomSpec:
-    """The index-th training scene: tones and looks come round in turn, the body part is drawn at random."""
+    """The index-th training scene: tones and looks come round in turn, the body part is drawn at random;
+    from conf.synthetic_scenes on, the healed stage's scenes, drawn the same way but far into healing."""
     rng = np.random.default_rng([conf.seed, index])
-    return PhantomSpec(
+    spec = PhantomSpec(
         shape=SHAPES[int(rng.integers(0, len(SHAPES)))],
         seed=int(rng.integers(1, 2**31)),
         views=conf.synthetic_views,
@@ -107,12 +114,16 @@ def phantom_spec(index: int, conf: TrainingConfig) -> PhantomSpec:
         distance_max_mm=300.0,
         jpeg_quality=int(rng.integers(70, 95)),
     )
+    stage = conf.healed_stage
+    if index < conf.synthetic_scenes or stage is None:
+        return spec
+    return msgspec.structs.replace(spec, healing=float(rng.uniform(stage.healing_min, stage.healing_max)))
 
 
 def render_scenes(conf: TrainingConfig, cache: Path) -> list[tuple[Path, PhantomSpec]]:
     """Renders the training scenes into cache/ (scenes already there are kept)."""
     scenes = []
-    for index in range(conf.synthetic_scenes):
+    for index in range(scene_count(conf)):
         spec = phantom_spec(index, conf)
         digest = hashlib.sha256(msgspec.json.encode(spec)).hexdigest()[:10]
         folder = cache / f"scene_{index:03d}_{digest}"
@@ -120,7 +131,7 @@ def render_scenes(conf: TrainingConfig, cache: Path) -> list[tuple[Path, Phantom
             log.info(
                 "rendering phantom %d/%d (%s, tone %s, %s)",
                 index + 1,
-                conf.synthetic_scenes,
+                scene_count(conf),
                 spec.shape,
                 spec.tone,
                 spec.burn_look,
@@ -152,13 +163,14 @@ def burn_crops(rgb: np.ndarray, mask: np.ndarray, rng: np.random.Generator, coun
 
 
 def synthetic_samples(
-    scenes: list[tuple[Path, PhantomSpec]], conf: TrainingConfig, crops_per_view: int = 3
+    scenes: list[tuple[Path, PhantomSpec]], conf: TrainingConfig, crops_per_view: int = 3, first_index: int = 0
 ) -> dict[str, list[Sample]]:
     """{'train', 'tune', 'validation'} crops around each view's burn; a scene kept out of training gives one
-    loose crop per view, as the analysis's region around the burn would be."""
+    loose crop per view, as the analysis's region around the burn would be. `first_index`: the number of
+    scenes[0] in the whole series, which sets its split."""
     splits: dict[str, list[Sample]] = {"train": [], "tune": [], "validation": []}
     size = conf.input_size * 2  # kept at twice the input so augmentation can rescale
-    for index, (folder, spec) in enumerate(scenes):
+    for index, (folder, spec) in enumerate(scenes, start=first_index):
         rng = np.random.default_rng([conf.seed, 7, index])
         split = scene_split(index)
         count = crops_per_view if split == "train" else 1

@@ -93,4 +93,5 @@ class BurnSegmenter:
     def probability(self, rgb: np.ndarray, region: Box | None = None) -> np.ndarray:
         """Burn probability (H, W) float32, rescaled so burn is >= 0.5 whatever threshold the model was
         tuned to; 0 outside what the passes looked at."""
-        return passes.rescaled(self.segment(rgb, region).probability, self.settings.threshold, region)
+        two = self.segment(rgb, region)
+        return passes.rescaled(two.probability, self.settings.threshold, two.looked_at(), in_place=True)

@@ -3,7 +3,8 @@
     run(conf, real_root, out_dir, cache_dir) -> out_dir/training_report.json
 
 Loss: L = a * soft Dice + (1 - a) * BCE, the BCE weighted up near the outline. One-cycle AdamW, batches
-at several input sides. processing.segmentation.evaluate exports, tunes and scores the result.
+at several input sides. Two stages, each with its own checkpoint: the first on the photos and the phantom
+burns, the second (shorter, from the first's weights) adding burns far into healing. processing.segmentation.evaluate exports, tunes and scores the result.
 """
 
 from __future__ import annotations
@@ -117,18 +118,28 @@ def batches(pool: list[datasets.Sample], conf: TrainingConfig, rng: np.random.Ge
         yield x, y
 
 
+def stage_recipe(conf: TrainingConfig, stage: int) -> str:
+    """The recipe a stage's checkpoint is bound to: the first stage's leaves the healed stage out, so a
+    change to the second stage does not throw the first away."""
+    if stage == 2:
+        return msgspec.json.encode(conf).decode()
+    first = msgspec.to_builtins(conf)
+    first.pop("healed_stage")
+    return msgspec.json.encode(first).decode()
+
+
 class Checkpoint:
-    """Everything a stopped run needs to go on exactly where it was: weights, optimiser, schedule,
+    """Everything a stopped stage needs to go on exactly where it was: weights, optimiser, schedule,
     random states, the curves and the time spent. Written whole after every epoch, then moved in place."""
 
-    def __init__(self, path: Path, conf: TrainingConfig):
-        self.path, self.conf = path, conf
+    def __init__(self, path: Path, recipe: str):
+        self.path, self.recipe = path, recipe
 
     def save(self, net, opt, sched, rng: np.random.Generator, state: dict) -> None:
         tmp = self.path.with_name(self.path.name + ".tmp")
         torch.save(
             {
-                "recipe": msgspec.json.encode(self.conf).decode(),
+                "recipe": self.recipe,
                 "model": net.state_dict(),
                 "optimizer": opt.state_dict(),
                 "scheduler": sched.state_dict(),
@@ -145,7 +156,7 @@ class Checkpoint:
         if not self.path.exists():
             return {}
         saved = torch.load(self.path, weights_only=False)
-        if saved["recipe"] != msgspec.json.encode(self.conf).decode():
+        if saved["recipe"] != self.recipe:
             raise InvalidInput(
                 f"{self.path} was made with another recipe; continue it with that recipe, or train into "
                 "another --out folder"
@@ -158,33 +169,35 @@ class Checkpoint:
         return {k: saved[k] for k in ("epoch", "loss_history", "tune_history", "train_seconds")}
 
 
-def train(
-    conf: TrainingConfig, real: dict, synthetic: dict, out_dir: Path, stop_after: int | None = None
-) -> tuple[BurnUNet, dict]:
-    """Trains (or continues a stopped run in out_dir) and returns the network and its progress;
-    stop_after ends this run after that many epochs in all (the checkpoint continues it later)."""
-    torch.manual_seed(conf.seed)
-    torch.set_num_threads(conf.threads)
-    rng = np.random.default_rng(conf.seed)
-    real_train, syn_train = real["train"], synthetic["train"]
-    net = BurnUNet(tuple(conf.widths))
+def _run_stage(
+    net: BurnUNet,
+    conf: TrainingConfig,
+    stage: tuple[int, int, float],
+    pools: tuple[list, list, list],
+    checkpoint: Checkpoint,
+    state: dict,
+    stop_after: int,
+) -> dict:
+    """Runs one stage from its checkpoint (or from `state` and the weights net has) to its last epoch or
+    stop_after epochs in all. stage: (first epoch, last epoch, peak learning rate), counted over both
+    stages; pools: the real training photos, the phantom crops and the tuning photos."""
+    first, last, learning_rate = stage
+    real_train, syn_train, real_tune = pools
+    rng = np.random.default_rng(conf.seed if first == 0 else [conf.seed, first])
     per_epoch = (len(real_train) + min(conf.synthetic_per_epoch, len(syn_train))) // conf.batch_size
     if per_epoch == 0:
         raise InvalidInput(
             f"too little training data: {len(real_train)} photos and {len(syn_train)} phantom crops "
             f"make no batch of {conf.batch_size}"
         )
-    opt = torch.optim.AdamW(net.parameters(), lr=conf.learning_rate, weight_decay=conf.weight_decay)
+    opt = torch.optim.AdamW(net.parameters(), lr=learning_rate, weight_decay=conf.weight_decay)
     sched = torch.optim.lr_scheduler.OneCycleLR(
-        opt, conf.learning_rate, total_steps=per_epoch * conf.epochs, pct_start=0.1
+        opt, learning_rate, total_steps=per_epoch * (last - first), pct_start=0.1
     )
-    out_dir.mkdir(parents=True, exist_ok=True)
-    checkpoint = Checkpoint(out_dir / "checkpoint.pt", conf)
-    state = {"epoch": 0, "loss_history": [], "tune_history": [], "train_seconds": 0.0}
-    state |= checkpoint.load(net, opt, sched, rng)
-    if state["epoch"]:
-        log.info("continuing %s after epoch %d of %d", checkpoint.path, state["epoch"], conf.epochs)
-    while state["epoch"] < min(conf.epochs, stop_after or conf.epochs):
+    state = state | checkpoint.load(net, opt, sched, rng)
+    if state["epoch"] > first:
+        log.info("continuing %s after epoch %d of %d", checkpoint.path, state["epoch"], last)
+    while state["epoch"] < min(last, stop_after):
         started = time.monotonic()
         net.train()
         picked = rng.choice(len(syn_train), min(conf.synthetic_per_epoch, len(syn_train)), replace=False)
@@ -200,17 +213,49 @@ def train(
             losses.append(loss.item())
         state["epoch"] += 1
         state["loss_history"].append(round(float(np.mean(losses)), 5))
-        state["tune_history"].append(single_pass_dice(net, real["tune"], conf.input_size))
+        state["tune_history"].append(single_pass_dice(net, real_tune, conf.input_size))
         state["train_seconds"] += time.monotonic() - started
         log.info(
             "epoch %d/%d loss %.4f, tuning Dice %.3f (%.0f s in all)",
             state["epoch"],
-            conf.epochs,
+            last,
             state["loss_history"][-1],
             state["tune_history"][-1],
             state["train_seconds"],
         )
         checkpoint.save(net, opt, sched, rng, state)
+    return state
+
+
+def train(
+    conf: TrainingConfig,
+    real: dict,
+    synthetic: dict,
+    out_dir: Path,
+    stop_after: int | None = None,
+    healed: list[datasets.Sample] = (),
+) -> tuple[BurnUNet, dict]:
+    """Trains (or continues a stopped run in out_dir) and returns the network and its progress: the first
+    stage on the photos and synthetic["train"], then the healed stage, if the recipe has one, adding the
+    `healed` phantom crops. stop_after ends this run after that many epochs in all (the checkpoints
+    continue it later)."""
+    torch.manual_seed(conf.seed)
+    torch.set_num_threads(conf.threads)
+    net = BurnUNet(tuple(conf.widths))
+    out_dir.mkdir(parents=True, exist_ok=True)
+    state = {"epoch": 0, "loss_history": [], "tune_history": [], "train_seconds": 0.0}
+    healed_stage = conf.healed_stage
+    total = conf.epochs + (healed_stage.epochs if healed_stage else 0)
+    stop_after = min(stop_after or total, total)
+    pools = (real["train"], synthetic["train"], real["tune"])
+    first = Checkpoint(out_dir / "checkpoint.pt", stage_recipe(conf, 1))
+    second = Checkpoint(out_dir / "checkpoint_healed.pt", stage_recipe(conf, 2))
+    if not (healed_stage and second.path.exists()):
+        state = _run_stage(net, conf, (0, conf.epochs, conf.learning_rate), pools, first, state, stop_after)
+    if healed_stage and stop_after > conf.epochs:
+        pools = (real["train"], synthetic["train"] + list(healed), real["tune"])
+        stage = (conf.epochs, total, healed_stage.learning_rate)
+        state = _run_stage(net, conf, stage, pools, second, state, stop_after)
     net.eval()
     return net, state
 
@@ -218,11 +263,16 @@ def train(
 def run(conf: TrainingConfig, real_root: Path, out_dir: Path, cache_dir: Path) -> Path:
     out_dir.mkdir(parents=True, exist_ok=True)
     real = datasets.real_samples(real_root, conf.validation_percent, conf.tune_percent)
-    synthetic = datasets.synthetic_samples(datasets.render_scenes(conf, cache_dir), conf)
+    scenes = datasets.render_scenes(conf, cache_dir)
+    first = conf.synthetic_scenes
+    synthetic = datasets.synthetic_samples(scenes[:first], conf)
+    healed = datasets.synthetic_samples(scenes[first:], conf, first_index=first)
     log.info(
-        "real photos %s; phantom crops %s",
+        "real photos %s; phantom crops %s, healed stage %s",
         {k: len(v) for k, v in real.items()},
         {k: len(v) for k, v in synthetic.items()},
+        {k: len(v) for k, v in healed.items()},
     )
-    net, state = train(conf, real, synthetic, out_dir)
-    return evaluate.run(conf, net, state, real, synthetic, out_dir)
+    net, state = train(conf, real, synthetic, out_dir, healed=healed["train"])
+    both = {k: synthetic[k] + healed[k] for k in synthetic}
+    return evaluate.run(conf, net, state, real, both, out_dir)
