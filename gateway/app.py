@@ -20,6 +20,7 @@ from base.web.pages.rendering import NAV_KEY, SITE_NAME_KEY, template_config
 from gateway.controllers.analyses import AnalysisController
 from gateway.controllers.assets import AssetController
 from gateway.controllers.decision_support import DecisionSupportController
+from gateway.controllers.fhir import FhirController
 from gateway.controllers.model import ModelController
 from gateway.controllers.parts import PART_CONTROLLERS
 from gateway.controllers.records import EncounterController, PatientController
@@ -51,6 +52,7 @@ def create_app(config: Config, *, start_workers: bool = False) -> Litestar:
             *PART_CONTROLLERS,
             DecisionSupportController,
             ReportController,
+            FhirController,
             SyncController,
             UploadController,
             AssetController,

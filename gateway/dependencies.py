@@ -17,6 +17,7 @@ from gateway.services import audit_trail
 from gateway.services.analyses import AnalysisService
 from gateway.services.assets import AssetService
 from gateway.services.decision_support import DecisionSupportService
+from gateway.services.fhir import FhirService
 from gateway.services.frames import FrameService
 from gateway.services.phone_sync import PhoneSync
 from gateway.services.records import RecordService
@@ -43,6 +44,7 @@ class Services:
     analyses: AnalysisService
     transfers: TransferService
     reports: ReportService
+    fhir: FhirService
     thumbnails: ThumbnailService
     run_sync_now: Callable[[], None] = lambda: None
     """Starts a sync round at once (set by the scheduler when [sync] enabled)."""
@@ -69,6 +71,7 @@ class Services:
             analyses=AnalysisService(db, config, assets),
             transfers=TransferService(db, config, reports),
             reports=reports,
+            fhir=FhirService(db, config, reports),
             thumbnails=ThumbnailService(config, assets),
         )
 

@@ -57,10 +57,86 @@ def test_the_demo_uploads_analyses_and_aligns_four_visits_then_exits(tmp_path):
         assert session["area_change_percent"] == pytest.approx(true_change, abs=3.0), session
     assert track["healing_rate_cm2_per_day"] > 0
     _check_report(out, track, tmp_path)
+    _check_fhir(out, db, tmp_path)
     _check_patient_page(out, db)
     again = subprocess.run(args, capture_output=True, text=True, cwd=REPO, env=env, timeout=300)
     assert again.returncode == 0, again.stderr[-4000:]  # a second run reuses the series, visits and analyses
     assert "Healing trend:" in again.stdout
+
+
+def _check_fhir(out: str, db, tmp_path) -> None:
+    """The day-0 encounter as a FHIR Bundle, fetched from a real gateway and written by the CLI: every resource
+    valid, one WoundSize per measured visit with the stored figures, each file it names served as described."""
+    import base64
+    import hashlib
+
+    import httpx
+
+    pytest.importorskip("fhir.resources", reason="the FHIR export needs fhir.resources (pyproject)")
+    from processing.fhir.bundle import model_of
+
+    lines = out.splitlines()
+    password = next(line for line in lines if line.startswith("Open the patient's page")).rsplit("password ", 1)[1]
+    report_line = next(line for line in lines if line.startswith("The clinical report of the day-0 visit"))
+    encounter_id = report_line.split("/api/v1/encounters/")[1].split("/")[0]
+    gateway = GatewayProcess(db, free_port())
+    gateway.env["BURNEDGE_JOBS_WORKERS"] = "0"
+    gateway.start(timeout=60)
+    try:
+        with httpx.Client(base_url=gateway.url, timeout=120) as http:
+            login = {"username": "clinician", "password": password.rstrip("):")}
+            token = http.post("/api/v1/auth/login", json=login).json()["access_token"]
+            headers = {"Authorization": f"Bearer {token}"}
+            r = http.get(f"/api/v1/encounters/{encounter_id}/fhir", headers=headers)
+            assert r.status_code == 200 and r.headers["content-type"].startswith("application/fhir+json")
+            bundle = r.json()
+            model_of("Bundle").model_validate(bundle)
+            resources = [e["resource"] for e in bundle["entry"]]
+            for resource in resources:
+                model_of(resource["resourceType"]).model_validate(resource)
+            sizes = [
+                x
+                for x in resources
+                if x["resourceType"] == "Observation" and x["code"]["coding"][0]["code"] == "72287-6"
+            ]
+            assert len(sizes) == 4  # the four measured visits
+            for panel in sizes:
+                job_id = panel["identifier"][0]["value"].split("/v")[0]
+                stored = http.get(f"/api/v1/analyses/{job_id}/result", headers=headers).json()["metrics"]
+                by_code = {c["code"]["coding"][0]["code"]: c["valueQuantity"] for c in panel["component"]}
+                assert by_code["89260-4"] == {
+                    **by_code["89260-4"],
+                    "value": round(stored["area_cm2"], 2),
+                    "code": "cm2",
+                }
+                assert by_code["39127-6"]["value"] == round(stored["relief_max_mm"] / 10, 3)
+                assert by_code["woundvolume"]["value"] == round(stored["volume_cm3"], 3)
+                assert "not a burn depth" in " ".join(n["text"] for n in panel["note"])
+                assert (
+                    "geometry"
+                    in next(c for c in panel["component"] if c["code"]["coding"][0]["code"] == "39127-6")["code"][
+                        "text"
+                    ].lower()
+                )
+                ids = {f"urn:uuid:{x['id']}" for x in resources}
+                assert panel["derivedFrom"] and all(d["reference"] in ids for d in panel["derivedFrom"])
+            assert sum(x["status"] == "preliminary" for x in sizes) == 1  # day 0, 3 h after the injury
+            files = [x["content"] for x in resources if x["resourceType"] == "Media"]
+            files += [x["content"][0]["attachment"] for x in resources if x["resourceType"] == "DocumentReference"]
+            for attachment in files[:1] + files[-2:]:  # a photo, the painted surface, the report
+                data = http.get(attachment["url"], headers=headers).content
+                assert len(data) == attachment["size"]
+                assert (
+                    base64.b64encode(hashlib.sha1(data, usedforsecurity=False).digest()).decode() == attachment["hash"]
+                )
+    finally:
+        gateway.stop()
+    written = tmp_path / "day0.fhir.json"
+    cli = [sys.executable, "-m", "burnedge.cli", "--db", str(db), "export", "fhir", encounter_id, "--out", str(written)]
+    run = subprocess.run(cli, capture_output=True, text=True, cwd=REPO, env=FAST_HASH_ENV, timeout=300)
+    assert run.returncode == 0, run.stderr[-3000:]
+    exported = model_of("Bundle").model_validate_json(written.read_text())
+    assert len(exported.entry) == len(bundle["entry"])
 
 
 def _check_patient_page(out: str, db) -> None:

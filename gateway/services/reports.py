@@ -85,7 +85,7 @@ class ReportService:
             decision_support.refresh(conn, None, encounter_id, self.config)
         now = utcnow()
         with self.db.read() as conn:
-            inputs = self._inputs(conn, encounter_id, now, made_by or (principal.username if principal else "gateway"))
+            inputs = self.snapshot(conn, encounter_id, now, made_by or (principal.username if principal else "gateway"))
         running = inputs.fluids_now is not None and inputs.fluids_now.phase is not FluidPhase.complete
         versions = versions_digest(inputs.refs())
         key = hashlib.sha256(f"{versions} {now:%Y-%m-%dT%H:%M}".encode()).hexdigest() if running else versions
@@ -110,7 +110,8 @@ class ReportService:
             )
         return MadeReport(pdf, f'"{key}"', path, made=True)
 
-    def _inputs(self, conn: sqlite3.Connection, encounter_id: str, now: dt.datetime, made_by: str) -> ReportInputs:
+    def snapshot(self, conn: sqlite3.Connection, encounter_id: str, now: dt.datetime, made_by: str) -> ReportInputs:
+        """Every record version a report (or the FHIR export) of the encounter is made from, read in one go."""
         gathered = decision_support.gather(conn, self.config, encounter_id, now)
         head = store.find_head(conn, RecordKind.decision_support, encounter_id)
         consultations = store.list_heads(conn, RecordKind.consultation, parent_id=encounter_id, limit=None)

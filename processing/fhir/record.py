@@ -1,0 +1,196 @@
+"""The clinical record as FHIR R4 resources: Patient, Encounter, the burns (Condition), %TBSA and body size
+(Observation), and the consultants' advice (Communication). Plain dicts in FHIR JSON; bundle.py validates them."""
+
+from __future__ import annotations
+
+import datetime as dt
+import uuid
+
+from processing.clinical.decision_inputs import Versioned
+from processing.fhir import codes
+from processing.fhir.codes import coding, concept
+from schemas.burn_chart import BurnChart
+from schemas.clinical_results import Assessment
+from schemas.patient import Encounter, Patient
+from schemas.transfer import Consultation
+
+NAMESPACE = uuid.UUID("5b0c3f8e-4a51-5d0b-9a57-1f3c0e0b6d21")
+"""Ids of resources that are not records themselves (an Observation, a Media) are UUIDv5 under this, so the
+same record versions export to the same ids."""
+PROVISIONAL_HOURS = 72.0
+
+
+def iso(moment: dt.datetime | str) -> str:
+    """An instant as FHIR writes it (ISO 8601 with its offset)."""
+    return moment if isinstance(moment, str) else moment.isoformat()
+
+
+def resource_id(*parts: str) -> str:
+    return str(uuid.uuid5(NAMESPACE, "|".join(parts)))
+
+
+def ref(resource: dict) -> dict:
+    return {"reference": f"urn:uuid:{resource['id']}"}
+
+
+def record_identifier(kind: str, record: Versioned) -> dict:
+    return {"system": f"{codes.LOCAL_ID}/{kind}", "value": f"{record.ref.id}/v{record.ref.version}"}
+
+
+def patient(record: Versioned[Patient]) -> dict:
+    p = record.value
+    out: dict = {
+        "resourceType": "Patient",
+        "id": p.id,
+        "identifier": [record_identifier("patient", record)],
+        "gender": codes.GENDER[p.sex],
+    }
+    if p.medical_record_number:
+        mrn = concept(("http://terminology.hl7.org/CodeSystem/v2-0203", "MR", "Medical record number"))
+        out["identifier"].append({"type": mrn, "system": f"{codes.LOCAL_ID}/mrn", "value": p.medical_record_number})
+    name = {k: v for k, v in (("family", p.family_name), ("given", [p.given_name] if p.given_name else None)) if v}
+    if name:
+        out["name"] = [{"use": "official", **name}]
+    if p.date_of_birth:
+        out["birthDate"] = p.date_of_birth.isoformat()
+    return out
+
+
+def encounter(record: Versioned[Encounter], subject: dict, conditions: list[dict]) -> dict:
+    e = record.value
+    out = {
+        "resourceType": "Encounter",
+        "id": e.id,
+        "identifier": [record_identifier("encounter", record)],
+        "status": "unknown",  # burnedge records the arrival, not the discharge
+        "class": coding(codes.ENCOUNTER_CLASS[e.mode]),
+        "subject": subject,
+        "period": {"start": iso(e.time_of_arrival)},
+        "reasonCode": [concept(codes.BURN, text="Burn injury")],
+    }
+    if conditions:
+        out["reasonReference"] = [ref(c) for c in conditions]
+    if e.facility:
+        out["serviceProvider"] = {"display": e.facility}
+    return out
+
+
+def _depth_status(chart: BurnChart, injured: dt.datetime | None) -> str:
+    """Burn depth evolves over the first days: an estimate charted before 72 h, or with no injury time, is
+    provisional."""
+    if injured is None:
+        return "provisional"
+    hours = (chart.assessed_at - injured).total_seconds() / 3600
+    return "provisional" if hours < PROVISIONAL_HOURS else "confirmed"
+
+
+def conditions(chart: Versioned[BurnChart] | None, enc: Versioned[Encounter], subject: dict) -> list[dict]:
+    """One Condition per charted region: the clinician's depth category at that body site."""
+    if chart is None:
+        return []
+    injured = enc.value.time_of_injury
+    status = _depth_status(chart.value, injured)
+    out = []
+    for entry in chart.value.entries:
+        site = codes.body_site(entry.region)
+        depth = codes.DEPTH_TEXT[entry.depth]
+        local = (codes.LOCAL_DEPTH, entry.depth.value, depth)
+        condition = {
+            "resourceType": "Condition",
+            "id": resource_id("condition", chart.ref.id, str(chart.ref.version), entry.region.value),
+            "identifier": [record_identifier("burn-chart", chart)],
+            "clinicalStatus": concept((codes.CONDITION_CLINICAL, "active", "Active")),
+            "verificationStatus": concept((codes.CONDITION_VERIFICATION, status, status.capitalize())),
+            "category": [concept((codes.CONDITION_CATEGORY, "encounter-diagnosis", "Encounter Diagnosis"))],
+            "code": concept(codes.DEPTH_SNOMED[entry.depth], local, text=f"{depth}, {site['text']}"),
+            "bodySite": [site],
+            "subject": subject,
+            "encounter": {"reference": f"urn:uuid:{enc.value.id}"},
+            "recordedDate": iso(chart.value.assessed_at),
+            "note": [
+                {
+                    "text": f"{entry.fraction:g} of the region charted as {depth.lower()} by the clinician"
+                    + (", circumferential" if entry.circumferential else "")
+                    + (
+                        ". Depth is a clinical judgement; burns evolve over the first 72 h."
+                        if status == "provisional"
+                        else "."
+                    )
+                }
+            ],
+        }
+        if injured:
+            condition["onsetDateTime"] = iso(injured)
+        out.append(condition)
+    return out
+
+
+def _observation(key: str, code: tuple, subject: dict, enc: dict, when: dt.datetime | str, category: str) -> dict:
+    return {
+        "resourceType": "Observation",
+        "id": resource_id("observation", key),
+        "status": "final",
+        "category": [concept((codes.OBSERVATION_CATEGORY, category, category.replace("-", " ").title()))],
+        "code": concept(code),
+        "subject": subject,
+        "encounter": enc,
+        "effectiveDateTime": iso(when),
+    }
+
+
+def quantity(value: float, unit: str, decimals: int = 2) -> dict:
+    return {"value": round(value, decimals), "unit": unit, "system": codes.UCUM, "code": unit}
+
+
+def assessment_observations(record: Versioned[Assessment] | None, subject: dict, enc: dict) -> list[dict]:
+    """%TBSA (Lund-Browder), body surface area, and the weight and height they were computed with."""
+    if record is None:
+        return []
+    a, key = record.value, f"{record.ref.id}/v{record.ref.version}"
+    out = []
+    if a.tbsa is not None:
+        tbsa = _observation(f"{key}/tbsa", codes.TBSA_BURNED, subject, enc, a.as_of, "exam")
+        tbsa["valueQuantity"] = quantity(a.tbsa.tbsa_percent, "%", 1)
+        tbsa["method"] = {"text": f"{a.tbsa.method} chart ({a.tbsa.age_adjustment}), superficial burns excluded"}
+        tbsa["component"] = [
+            {"code": concept(codes.TBSA_PARTIAL), "valueQuantity": quantity(a.tbsa.partial_thickness_percent, "%", 1)},
+            {"code": concept(codes.TBSA_FULL), "valueQuantity": quantity(a.tbsa.full_thickness_percent, "%", 1)},
+        ]
+        out.append(tbsa)
+    if a.bsa is not None:
+        for name, code, value, unit in (
+            ("bsa", codes.BODY_SURFACE_AREA, a.bsa.bsa_m2, "m2"),
+            ("weight", codes.BODY_WEIGHT, a.bsa.weight_kg, "kg"),
+            ("height", codes.BODY_HEIGHT, a.bsa.height_cm, "cm"),
+        ):
+            obs = _observation(f"{key}/{name}", code, subject, enc, a.as_of, "vital-signs")
+            obs["valueQuantity"] = quantity(value, unit)
+            if name == "bsa":
+                obs["method"] = {"text": a.bsa.method}
+            out.append(obs)
+    return out
+
+
+def communications(consultations: list[Versioned[Consultation]], subject: dict, enc: dict) -> list[dict]:
+    """Each consultant's advice received, as the clinic stored it."""
+    out = []
+    for record in consultations:
+        note = record.value.note
+        out.append(
+            {
+                "resourceType": "Communication",
+                "id": resource_id("communication", note.note_id),
+                "identifier": [{"system": f"{codes.LOCAL_ID}/consultation-note", "value": note.note_id}],
+                "status": "completed",
+                "subject": subject,
+                "encounter": enc,
+                "sent": iso(note.written_at),
+                "received": iso(record.value.received_at),
+                "sender": {"display": f"{note.consultant} ({note.center_id})"},
+                "payload": [
+                    {"contentString": f"Recommendation: {note.recommendation.value}. {note.advice}"},
+                    {"contentString": note.notice},
+                ],
+            }
+        )
+    return out

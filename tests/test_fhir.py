@@ -1,0 +1,159 @@
+"""The FHIR R4 export over the real app: a record without analyses, the burn chart and %TBSA with their codes,
+permissions, and a round trip through fhir.resources' models. The demo's four measured visits are exported in
+tests/test_demo.py."""
+
+from __future__ import annotations
+
+import datetime as dt
+import json
+from pathlib import Path
+
+import pytest
+
+from harness.bodies import encounter_body, now, patient_body
+from processing.clinical.decision_inputs import Versioned
+from processing.fhir import codes, wound
+from processing.fhir.bundle import model_of
+from processing.report.inputs import AnalysisPage
+from schemas.analysis import AnalysisResult, AnalysisStatus, BurnMetrics
+from schemas.clinical_results import InputRef
+from schemas.ids import uuid7
+from schemas.jobs import BurnAnalysis
+
+fhir_resources = pytest.importorskip("fhir.resources", reason="the FHIR export needs fhir.resources (pyproject)")
+
+
+@pytest.fixture
+def clin(auth):
+    return auth["clinician"]
+
+
+@pytest.fixture
+def charted(client, clin) -> dict:
+    patient = patient_body(given_name="Amara", family_name="Okafor", medical_record_number="MRN-4471")
+    assert client.post("/api/v1/patients", json=patient, headers=clin).status_code == 201
+    encounter = encounter_body(patient["id"])
+    assert client.post("/api/v1/encounters", json=encounter, headers=clin).status_code == 201
+    eid = encounter["id"]
+    chart = {
+        "encounter_id": eid,
+        "assessed_at": now().isoformat(),
+        "entries": [
+            {"region": "trunk_anterior", "fraction": 1.0, "depth": "deep_partial"},
+            {"region": "thigh_right_anterior", "fraction": 0.5, "depth": "full_thickness"},
+            {"region": "lower_arm_left_posterior", "fraction": 1.0, "depth": "superficial"},
+        ],
+    }
+    r = client.put(f"/api/v1/encounters/{eid}/burn-chart", json=chart, headers={**clin, "If-None-Match": "*"})
+    assert r.status_code == 201
+    return {"patient": patient, "encounter": encounter, "chart": chart}
+
+
+def _export(client, headers, eid):
+    return client.get(f"/api/v1/encounters/{eid}/fhir", headers=headers)
+
+
+def _of_type(bundle: dict, resource_type: str) -> list[dict]:
+    return [e["resource"] for e in bundle["entry"] if e["resource"]["resourceType"] == resource_type]
+
+
+def _code(concept: dict, system: str) -> str:
+    return next((c["code"] for c in concept["coding"] if c["system"] == system), None)
+
+
+def test_a_record_without_analyses_exports_the_burns_and_tbsa_and_no_wound_size(client, clin, charted):
+    eid = charted["encounter"]["id"]
+    r = _export(client, clin, eid)
+    assert r.status_code == 200 and r.headers["content-type"].startswith("application/fhir+json")
+    bundle = r.json()
+    assert bundle["resourceType"] == "Bundle" and bundle["type"] == "collection"
+    (patient,) = _of_type(bundle, "Patient")
+    assert patient["name"][0] == {"use": "official", "family": "Okafor", "given": ["Amara"]}
+    assert {"system": f"{codes.LOCAL_ID}/mrn", "value": "MRN-4471"}.items() <= patient["identifier"][1].items()
+    (encounter,) = _of_type(bundle, "Encounter")
+    assert encounter["class"]["code"] == "EMER" and "start" in encounter["period"]
+    conditions = {_code(c["bodySite"][0], codes.LOCAL_REGION): c for c in _of_type(bundle, "Condition")}
+    assert set(conditions) == {"trunk_anterior", "thigh_right_anterior", "lower_arm_left_posterior"}
+    thigh = conditions["thigh_right_anterior"]
+    assert _code(thigh["code"], codes.SNOMED) == "403192003"  # full thickness burn
+    assert _code(thigh["bodySite"][0], codes.SNOMED) == "68367000" and "right thigh" in thigh["bodySite"][0]["text"]
+    assert _code(conditions["trunk_anterior"]["code"], codes.LOCAL_DEPTH) == "deep_partial"
+    assert _code(conditions["lower_arm_left_posterior"]["bodySite"][0], codes.SNOMED) == "14975008"  # forearm
+    assert thigh["verificationStatus"]["coding"][0]["code"] == "provisional"  # charted 3 h after the injury
+    injured = dt.datetime.fromisoformat(charted["encounter"]["time_of_injury"])
+    assert dt.datetime.fromisoformat(thigh["onsetDateTime"]) == injured
+    stored = client.get(f"/api/v1/encounters/{eid}/assessment", headers=clin).json()["data"]["tbsa"]
+    (tbsa,) = [o for o in _of_type(bundle, "Observation") if _code(o["code"], codes.LOCAL_OBSERVATION) == "tbsa-burned"]
+    assert tbsa["valueQuantity"]["value"] == round(stored["tbsa_percent"], 1) and tbsa["valueQuantity"]["unit"] == "%"
+    wound_sizes = [o for o in _of_type(bundle, "Observation") if o["code"]["coding"][0]["code"] == "72287-6"]
+    assert wound_sizes == [] and _of_type(bundle, "Media") == []  # no analysis: no figures, none invented
+    (report,) = _of_type(bundle, "DocumentReference")
+    attachment = report["content"][0]["attachment"]
+    pdf = client.get(attachment["url"], headers=clin)
+    assert pdf.status_code == 200 and len(pdf.content) == attachment["size"]
+    (provenance,) = _of_type(bundle, "Provenance")
+    assert len(provenance["target"]) == len(bundle["entry"]) - 1
+    assert any(a["type"]["coding"][0]["code"] == "assembler" for a in provenance["agent"])
+
+
+def test_the_exported_json_parses_back_with_the_fhir_models(client, clin, charted):
+    text = _export(client, clin, charted["encounter"]["id"]).text
+    parsed = model_of("Bundle").model_validate_json(text)
+    again = json.loads(parsed.model_dump_json(exclude_none=True))
+    assert again["entry"] and len(again["entry"]) == len(json.loads(text)["entry"])
+    for entry in json.loads(text)["entry"]:
+        resource = entry["resource"]
+        model = model_of(resource["resourceType"]).model_validate(resource)
+        assert json.loads(model.model_dump_json(exclude_none=True))["id"] == resource["id"]
+
+
+def test_who_may_export(client, auth, charted):
+    eid = charted["encounter"]["id"]
+    for role in ("clinician", "nurse", "consultant"):
+        assert _export(client, auth[role], eid).status_code == 200
+    assert _export(client, auth["admin"], eid).status_code == 403
+    unknown = _export(client, auth["clinician"], "0192f3b4-6a8e-7c3d-9b1a-000000000000")
+    assert unknown.status_code == 404 and unknown.headers["content-type"].startswith("application/problem+json")
+    assert client.get(f"/api/v1/encounters/{eid}/fhir").status_code == 401
+
+
+def _page(result) -> AnalysisPage:
+    value = BurnAnalysis(
+        encounter_id=uuid7(),
+        job_id=uuid7(),
+        assets=[],
+        requested_by="nurse",
+        requested_at="2026-11-13T05:00:00+00:00",
+        completed_at="2026-11-13T05:09:00+00:00",
+        result=result,
+    )
+    return AnalysisPage(
+        Versioned(value, InputRef(kind="burn_analysis", id=value.job_id, version=1)), Path("."), "visit"
+    )
+
+
+def test_without_a_metric_scale_no_figure_is_exported_and_a_note_says_why():
+    subject, enc = {"reference": "urn:uuid:p"}, {"reference": "urn:uuid:e"}
+    unscaled = AnalysisResult(
+        status=AnalysisStatus.unscaled,
+        metrics=BurnMetrics(area_model_units2=3.2, burn_loops=1),
+        hours_since_injury=100.0,
+        provisional=False,
+    )
+    panel = wound.wound_size(_page(unscaled), subject, enc, [], None)
+    assert "component" not in panel and panel["status"] == "final"
+    assert "No metric scale" in panel["note"][0]["text"]
+    model_of("Observation").model_validate(panel)
+    scaled = AnalysisResult(
+        status=AnalysisStatus.ok,
+        metrics=BurnMetrics(area_cm2=12.345, perimeter_cm=13.1, relief_max_mm=2.4, volume_cm3=0.61),
+        hours_since_injury=None,
+    )
+    panel = wound.wound_size(_page(scaled), subject, enc, [], None)
+    values = {c["code"]["coding"][0]["code"]: c["valueQuantity"] for c in panel["component"]}
+    assert values["89260-4"]["value"] == 12.35 and values["89260-4"]["code"] == "cm2"
+    assert values["39127-6"] == {"value": 0.24, "unit": "cm", "system": codes.UCUM, "code": "cm"}
+    assert values["woundvolume"]["code"] == "mL" and values["wound-perimeter"]["value"] == 13.1
+    # no time since injury: possibly under 72 h, so provisional
+    assert panel["status"] == "preliminary" and "unknown time" in panel["note"][0]["text"]
+    model_of("Observation").model_validate(panel)
