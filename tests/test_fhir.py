@@ -12,13 +12,14 @@ import pytest
 
 from harness.bodies import encounter_body, now, patient_body
 from processing.clinical.decision_inputs import Versioned
-from processing.fhir import codes, wound
+from processing.fhir import codes, record, wound
 from processing.fhir.bundle import model_of
 from processing.report.inputs import AnalysisPage
 from schemas.analysis import AnalysisResult, AnalysisStatus, BurnMetrics
 from schemas.clinical_results import InputRef
 from schemas.ids import uuid7
 from schemas.jobs import BurnAnalysis
+from schemas.transfer import Consultation, ConsultationNote, Recommendation
 
 fhir_resources = pytest.importorskip("fhir.resources", reason="the FHIR export needs fhir.resources (pyproject)")
 
@@ -157,3 +158,32 @@ def test_without_a_metric_scale_no_figure_is_exported_and_a_note_says_why():
     # no time since injury: possibly under 72 h, so provisional
     assert panel["status"] == "preliminary" and "unknown time" in panel["note"][0]["text"]
     model_of("Observation").model_validate(panel)
+
+
+def test_a_consultants_advice_becomes_a_communication_with_its_notice():
+    note = ConsultationNote(
+        note_id=uuid7(),
+        encounter_id=uuid7(),
+        patient_id=uuid7(),
+        bundle_id=uuid7(),
+        bundle_version=2,
+        center_id="center-north",
+        consultant="Dr. Achieng Otieno",
+        consultant_user_id=uuid7(),
+        written_at="2026-11-13T09:30:00+00:00",
+        recommendation=Recommendation.transfer,
+        advice="Full-thickness thigh burn: transfer for excision and grafting; keep warm, cling film.",
+    )
+    stored = Consultation(
+        encounter_id=note.encounter_id, note=note, received_at="2026-11-13T09:31:05+00:00", signed_by="center-north"
+    )
+    subject, enc = {"reference": "urn:uuid:p"}, {"reference": "urn:uuid:e"}
+    (sent,) = record.communications(
+        [Versioned(stored, InputRef(kind="consultation", id=note.note_id, version=1))], subject, enc
+    )
+    model_of("Communication").model_validate(sent)
+    assert sent["sender"]["display"] == "Dr. Achieng Otieno (center-north)"
+    assert sent["sent"] == note.written_at and sent["received"] == stored.received_at
+    texts = [p["contentString"] for p in sent["payload"]]
+    assert texts[0].startswith("Recommendation: transfer.") and note.advice in texts[0]
+    assert "has not examined the patient" in texts[1]
