@@ -1,6 +1,6 @@
 """Burn metrics on phantoms against their exact ground truth, and the fusion rules compared.
 
-    .venv/bin/python -m benchmarks.analysis_accuracy [--work DIR] [--model] [--only NAME,...]
+    .venv/bin/python -m benchmarks.analysis_accuracy [--work DIR] [--model [--model-file F]] [--only NAME,...]
 
 Scenes: ten of our own phantoms (three body parts, skin types I-VI, flat and cratered burns of
 4-40 cm2, two large full-thickness and two small burns among them) and the four independent ones in ../shared/phantoms (p4: day 0). Each is analysed with
@@ -25,6 +25,7 @@ import statistics
 import tempfile
 from pathlib import Path
 
+import msgspec
 import numpy as np
 
 from processing.analysis import burn_region, relief, surface_map
@@ -118,10 +119,10 @@ def quartic_baseline(out: Path, data: np.lib.npyio.NpzFile) -> tuple[float | Non
     return found.max_mm, found.volume_mm3 / 1000
 
 
-def row(name: str, scene: Path, work: Path, model: bool) -> dict:
+def row(name: str, scene: Path, work: Path, model: bool, config: Config) -> dict:
     truth = json.loads((scene / "ground_truth.json").read_text())
     out = work / "analyses" / name
-    result = analyze(Config(), scene / "images", out, masks=None if model else scene / "masks")
+    result = analyze(config, scene / "images", out, masks=None if model else scene / "masks")
     if result.status.value != "ok":
         return {"scene": name, "status": result.status.value, "reason": result.reason}
     m = result.metrics
@@ -189,12 +190,18 @@ def main() -> None:
     parser.add_argument("--work", default=os.path.join(tempfile.gettempdir(), "burnedge-bench-analysis"))
     parser.add_argument("--model", action="store_true", help="the model's masks instead of the true ones")
     parser.add_argument("--only", default="", help="comma-separated scene names")
+    parser.add_argument("--model-file", default="", help="another ONNX model than the shipped one (with --model)")
     args = parser.parse_args()
+    config = Config()
+    if args.model_file:
+        config = msgspec.structs.replace(
+            config, analysis=msgspec.structs.replace(config.analysis, model=args.model_file)
+        )
     work = Path(args.work)  # one analysis folder per scene: --model reuses the reconstruction
     only = {s for s in args.only.split(",") if s}
     rows = []
     for name, scene in scenes(Path(args.work), only).items():
-        rows.append(row(name, scene, work, args.model))
+        rows.append(row(name, scene, work, args.model, config))
         print(json.dumps(rows[-1]), flush=True)
     report = {
         "date": dt.date.today().isoformat(),

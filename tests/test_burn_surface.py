@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from processing.analysis import burn_region as br
-from processing.analysis import fusion, projection, relief
+from processing.analysis import fusion, projection, relief, surface_map
 from schemas.errors import InvalidInput
 from tests import surface_shapes as ss
 
@@ -370,3 +370,17 @@ def test_specks_apart_from_the_burn_are_set_aside_but_a_satellite_burn_counts():
     stray = stray_regions(mesh.vertices, mesh.faces, q)
     np.testing.assert_array_equal(stray, speck)
     assert not stray_regions(mesh.vertices, mesh.faces, np.zeros(len(q))).any()
+
+
+def test_a_few_vertices_over_the_threshold_are_no_burn_found_never_a_burn_of_0_cm2():
+    s = ss.sheet(half=45.0, step=1.0)  # a 9 cm square of skin, all looked at
+    rho = np.linalg.norm(s.vertices[:, :2], axis=1)
+    nothing = np.zeros(len(rho))
+    speck = np.where(rho < 0.5, 0.9, 0.0)  # one vertex over 0.5: its split faces hold a fraction of a mm2
+    burn = np.where(rho < 10.0, 0.9, 0.0)  # a 3 cm2 burn
+    assert not surface_map.burn_found(s.vertices, s.faces, nothing)
+    assert not surface_map.burn_found(s.vertices, s.faces, speck)
+    assert surface_map.burn_found(s.vertices, s.faces, burn)
+    unseen = burn.copy()
+    unseen[rho > 12.0] = np.nan  # only the skin looked at counts: a burn that fills the view is still a burn
+    assert surface_map.burn_found(s.vertices, s.faces, unseen)

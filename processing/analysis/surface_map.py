@@ -21,7 +21,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
 from processing.analysis import fusion, segment_views
-from processing.analysis.burn_region import mesh_edges, triangle_areas
+from processing.analysis.burn_region import burn_area_mm2, mesh_edges, triangle_areas
 from processing.analysis.projection import sample_views
 from processing.reconstruction.dense import to_output_frame
 from processing.reconstruction.mesh import write_glb
@@ -76,6 +76,9 @@ def read_probability(seg_dir: Path, record: ViewMask, view: View) -> np.ndarray:
     return view.undistort_image(prob, outside=np.nan)
 
 
+MIN_BURN_SHARE = 0.001
+"""A burn on the surface smaller than this share of the skin the views looked at around it (0.06 cm2 of the
+region a 45 mm crop sees) is no burn found: a few vertices over the threshold measure 0.0 cm2, never a result."""
 STRAY_SHARE = 0.2
 """A separate burn region under this share of the largest one's area is set aside (neither burn nor healthy):
 the model's specks on the drape or a shadow must not add area, edge length, or a false 'healthy' ring. A
@@ -95,6 +98,13 @@ def stray_regions(vertices: np.ndarray, faces: np.ndarray, q: np.ndarray) -> np.
     area = np.bincount(label[faces.ravel()], weights=corner_area * burn[faces.ravel()], minlength=label.max() + 1)
     area[np.unique(label[~burn])] = 0.0  # a healthy vertex is a region of its own: not burn
     return burn & (area[label] < STRAY_SHARE * area.max())
+
+
+def burn_found(vertices: np.ndarray, faces: np.ndarray, q: np.ndarray) -> bool:
+    """Whether the fused burn (q >= 0.5; NaN: not looked at) covers at least MIN_BURN_SHARE of the skin looked at."""
+    seen = ~np.isnan(q)
+    looked_at = float(triangle_areas(vertices[faces[np.all(seen[faces], axis=1)]]).sum())
+    return bool(np.any(np.nan_to_num(q) >= 0.5)) and burn_area_mm2(vertices, faces, q) > MIN_BURN_SHARE * looked_at
 
 
 def run(
@@ -123,10 +133,11 @@ def run(
         q_rule[stray_regions(vertices, faces, q_rule)] = np.nan
     q = fused[conf.fusion_rule]
     agreement = fusion.view_agreement(p, w, ~np.isnan(q))
-    if not np.any(np.nan_to_num(q) >= 0.5):
+    if not burn_found(vertices, faces, q):
         raise CaptureInsufficient(
-            "no burn was found on the reconstructed surface; check the overlays, or draw the burn's outline "
-            "on some photos (--masks) and run again",
+            "no burn was found on the reconstructed surface (nothing, or only specks under "
+            f"{MIN_BURN_SHARE:.1%} of the skin looked at); check the overlays, or draw the burn's outline on "
+            "some photos (--masks) and run again",
             code=FailureCode.no_burn,
         )
     tmp = out_dir / (ARRAYS + ".tmp.npz")
