@@ -40,7 +40,8 @@ def charted(client, clin) -> dict:
         "encounter_id": eid,
         "assessed_at": now().isoformat(),
         "entries": [
-            {"region": "trunk_anterior", "fraction": 1.0, "depth": "deep_partial"},
+            {"region": "trunk_anterior", "fraction": 0.5, "depth": "deep_partial"},
+            {"region": "trunk_anterior", "fraction": 0.5, "depth": "superficial_partial"},
             {"region": "thigh_right_anterior", "fraction": 0.5, "depth": "full_thickness"},
             {"region": "lower_arm_left_posterior", "fraction": 1.0, "depth": "superficial"},
         ],
@@ -73,12 +74,16 @@ def test_a_record_without_analyses_exports_the_burns_and_tbsa_and_no_wound_size(
     assert {"system": f"{codes.LOCAL_ID}/mrn", "value": "MRN-4471"}.items() <= patient["identifier"][1].items()
     (encounter,) = _of_type(bundle, "Encounter")
     assert encounter["class"]["code"] == "EMER" and "start" in encounter["period"]
-    conditions = {_code(c["bodySite"][0], codes.LOCAL_REGION): c for c in _of_type(bundle, "Condition")}
+    assert len({e["fullUrl"] for e in bundle["entry"]}) == len(bundle["entry"])  # every resource once
+    found = _of_type(bundle, "Condition")
+    assert len(found) == 4  # one region charted at two depths is two burns
+    conditions = {_code(c["bodySite"][0], codes.LOCAL_REGION): c for c in found}
     assert set(conditions) == {"trunk_anterior", "thigh_right_anterior", "lower_arm_left_posterior"}
     thigh = conditions["thigh_right_anterior"]
     assert _code(thigh["code"], codes.SNOMED) == "403192003"  # full thickness burn
     assert _code(thigh["bodySite"][0], codes.SNOMED) == "68367000" and "right thigh" in thigh["bodySite"][0]["text"]
-    assert _code(conditions["trunk_anterior"]["code"], codes.LOCAL_DEPTH) == "deep_partial"
+    trunk = {_code(c["code"], codes.LOCAL_DEPTH) for c in found if c["bodySite"][0]["text"].startswith("trunk")}
+    assert trunk == {"deep_partial", "superficial_partial"}
     assert _code(conditions["lower_arm_left_posterior"]["bodySite"][0], codes.SNOMED) == "14975008"  # forearm
     assert thigh["verificationStatus"]["coding"][0]["code"] == "provisional"  # charted 3 h after the injury
     injured = dt.datetime.fromisoformat(charted["encounter"]["time_of_injury"])
@@ -116,6 +121,11 @@ def test_who_may_export(client, auth, charted):
     unknown = _export(client, auth["clinician"], "0192f3b4-6a8e-7c3d-9b1a-000000000000")
     assert unknown.status_code == 404 and unknown.headers["content-type"].startswith("application/problem+json")
     assert client.get(f"/api/v1/encounters/{eid}/fhir").status_code == 401
+    gone = client.delete(
+        f"/api/v1/encounters/{eid}", params={"reason": "opened twice"}, headers={**auth["clinician"], "If-Match": '"1"'}
+    )
+    assert gone.status_code == 200
+    assert _export(client, auth["clinician"], eid).status_code == 409  # withdrawn: nothing exported
 
 
 def _page(result) -> AnalysisPage:
@@ -151,6 +161,7 @@ def test_without_a_metric_scale_no_figure_is_exported_and_a_note_says_why():
         hours_since_injury=None,
     )
     panel = wound.wound_size(_page(scaled), subject, enc, [], None)
+    assert "derivedFrom" not in panel  # no photo file found: no empty list
     values = {c["code"]["coding"][0]["code"]: c["valueQuantity"] for c in panel["component"]}
     assert values["89260-4"]["value"] == 12.35 and values["89260-4"]["code"] == "cm2"
     assert values["39127-6"] == {"value": 0.24, "unit": "cm", "system": codes.UCUM, "code": "cm"}
@@ -187,3 +198,19 @@ def test_a_consultants_advice_becomes_a_communication_with_its_notice():
     texts = [p["contentString"] for p in sent["payload"]]
     assert texts[0].startswith("Recommendation: transfer.") and note.advice in texts[0]
     assert "has not examined the patient" in texts[1]
+
+
+def test_a_raised_burn_gets_no_relief_component_and_a_note_why():
+    raised = AnalysisResult(
+        status=AnalysisStatus.ok,
+        metrics=BurnMetrics(area_cm2=6.0, perimeter_cm=9.0, relief_max_mm=-0.4, raised_max_mm=1.2, volume_cm3=0.0),
+        hours_since_injury=80.0,
+        provisional=False,
+        notes=["surface relief and volume are uncertain: the healthy skin around the burn is uneven"],
+    )
+    panel = wound.wound_size(_page(raised), {"reference": "urn:uuid:p"}, {"reference": "urn:uuid:e"}, [], None)
+    codes_given = {c["code"]["coding"][0]["code"] for c in panel["component"]}
+    assert "39127-6" not in codes_given and "89260-4" in codes_given
+    texts = " ".join(n["text"] for n in panel["note"])
+    assert "not below the healthy skin" in texts and "relief and volume are uncertain" in texts
+    model_of("Observation").model_validate(panel)

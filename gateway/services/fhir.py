@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import datetime as dt
 import logging
+import re
 import sqlite3
 
 import msgspec
@@ -19,7 +20,6 @@ from processing.fhir import bundle as fhir_bundle
 from processing.fhir.wound import Attached, attached
 from processing.report.inputs import AnalysisPage
 from schemas.analysis import SegmentationRecord
-from schemas.base import utcnow
 from schemas.capture import Asset
 from schemas.config import Config
 from schemas.errors import NotFound
@@ -27,13 +27,14 @@ from schemas.records import RecordKind
 
 log = logging.getLogger(__name__)
 SURFACE = "surface/burn_surface.glb"
+OFFSET = re.compile(r"[+-](0\d|1[0-4]):[0-5]\d")
 
 
 def _taken(asset: Asset) -> str | None:
     """When the camera says the photo was taken, as FHIR dateTime; None without a time zone (EXIF's own
     DateTimeOriginal has none) or in a form not understood."""
     meta = asset.metadata
-    if not meta.captured_at or not meta.captured_offset:
+    if not meta.captured_at or not meta.captured_offset or not OFFSET.fullmatch(meta.captured_offset):
         return None
     for form in ("%Y:%m:%d %H:%M:%S", "%Y-%m-%dT%H:%M:%S", "%Y-%m-%d %H:%M:%S"):
         try:
@@ -85,16 +86,23 @@ class FhirService:
         if principal is not None:
             for kind in (*REPORT_KINDS, RecordKind.encounter):
                 require_read(principal, kind)
-        report = self.reports.make(principal, encounter_id, made_by=made_by)
-        who = made_by or (principal.username if principal else "gateway")
+        inputs = self.reports.current(encounter_id, made_by or (principal.username if principal else "gateway"))
+        report = self.reports.make_from(principal, inputs)  # the same snapshot as the Bundle
         with self.db.read() as conn:
-            inputs = self.reports.snapshot(conn, encounter_id, utcnow(), who)
             files = fhir_bundle.BundleFiles(
                 analyses={p.analysis.value.job_id: self._analysis_files(conn, p) for p in inputs.analyses},
                 report=attached(
                     report.path, f"/api/v1/encounters/{encounter_id}/report.pdf", "application/pdf", "report.pdf"
                 ),
             )
+        try:
+            out = fhir_bundle.build(inputs, files)
+        except fhir_bundle.InvalidFhir as exc:
+            log.error("FHIR export of encounter %s: %s", encounter_id, exc)
+            raise fhir_bundle.InvalidFhir(
+                "the FHIR Bundle made of this encounter did not validate: a fault in burnedge, not in the record; "
+                "nothing was sent (the gateway's log names the resource)"
+            ) from exc
         out = fhir_bundle.build(inputs, files)
         with self.db.write() as conn:
             audit.append(

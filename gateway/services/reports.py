@@ -78,14 +78,24 @@ class ReportService:
         if principal is not None:
             for kind in REPORT_KINDS:
                 require_read(principal, kind)
+        inputs = self.current(encounter_id, made_by or (principal.username if principal else "gateway"))
+        return self.make_from(principal, inputs)
+
+    def current(self, encounter_id: str, made_by: str) -> ReportInputs:
+        """Decision support brought up to date, then every record version the encounter's report reads, in one
+        snapshot (a withdrawn encounter is a Conflict)."""
         with self.db.write() as conn:
             encounter = store.get_head(conn, RecordKind.encounter, encounter_id)
             if encounter.meta.deleted:
                 raise Conflict("this encounter was withdrawn: no report is made of it", current=encounter)
             decision_support.refresh(conn, None, encounter_id, self.config)
-        now = utcnow()
         with self.db.read() as conn:
-            inputs = self.snapshot(conn, encounter_id, now, made_by or (principal.username if principal else "gateway"))
+            return self.snapshot(conn, encounter_id, utcnow(), made_by)
+
+    def make_from(self, principal: Principal | None, inputs: ReportInputs) -> MadeReport:
+        """The report of exactly this snapshot (the stored one when the same versions were reported before)."""
+        encounter_id = inputs.encounter.value.id
+        now = inputs.made_at
         running = inputs.fluids_now is not None and inputs.fluids_now.phase is not FluidPhase.complete
         versions = versions_digest(inputs.refs())
         key = hashlib.sha256(f"{versions} {now:%Y-%m-%dT%H:%M}".encode()).hexdigest() if running else versions

@@ -51,8 +51,8 @@ def _analysis_resources(inputs: ReportInputs, files: BundleFiles, subject: dict,
         visit_id = page.analysis.value.encounter_id
         visit = enc
         if visit_id != inputs.encounter.value.id:  # another visit's encounter: named, not in this Bundle
-            visit = {"identifier": {"system": f"{codes.LOCAL_ID}/encounter", "value": visit_id}, "display": page.visit}
-        photos = [wound.media(p, subject, visit) for p in found.photos]
+            visit = {"identifier": record.record_identifier("encounter", visit_id), "display": page.visit}
+        photos = [wound.media(p, subject, visit, job_id) for p in found.photos]
         out += photos + [wound.wound_size(page, subject, visit, photos, found.model)]
         if found.surface:
             text = f"Painted 3D burn surface of the analysis of {page.visit} (glTF binary)"
@@ -78,7 +78,10 @@ def _provenance(inputs: ReportInputs, files: BundleFiles, targets: list[dict]) -
             agents.append({"type": concept((codes.PROVENANCE_AGENT, role, role.title())), "who": {"display": name}})
     models = {f.model.sha256: f.model for f in files.analyses.values() if f.model}
     entities = [
-        {"role": "source", "what": {"display": f"segmentation model {m.version} (sha256 {m.sha256})"}}
+        {
+            "role": "source",
+            "what": {"display": f"segmentation model {m.version or '(unversioned)'} (sha256 {m.sha256})"},
+        }
         for m in models.values()
     ]
     out = {
@@ -100,7 +103,7 @@ def build(inputs: ReportInputs, files: BundleFiles) -> dict:
     enc = {"reference": f"urn:uuid:{inputs.encounter.value.id}"}
     conditions = record.conditions(inputs.chart, inputs.encounter, subject)
     resources = [patient, record.encounter(inputs.encounter, subject, conditions), *conditions]
-    resources += record.assessment_observations(inputs.assessment, subject, enc)
+    resources += record.assessment_observations(inputs.assessment, inputs.chart, inputs.encounter, subject, enc)
     resources += _analysis_resources(inputs, files, subject, enc)
     resources += record.communications(inputs.consultations, subject, enc)
     if files.report:
@@ -129,6 +132,10 @@ def validate(bundle: dict) -> None:
     """Every entry, then the Bundle, through fhir.resources; raises InvalidFhir naming the resource."""
     from pydantic import ValidationError
 
+    urls = [e["fullUrl"] for e in bundle["entry"]]
+    if len(set(urls)) != len(urls):
+        twice = sorted({u for u in urls if urls.count(u) > 1})
+        raise InvalidFhir(f"the Bundle holds {len(twice)} fullUrl(s) twice, e.g. {twice[0]}")
     for entry in bundle["entry"]:
         resource = entry["resource"]
         try:

@@ -33,8 +33,13 @@ def ref(resource: dict) -> dict:
     return {"reference": f"urn:uuid:{resource['id']}"}
 
 
-def record_identifier(kind: str, record: Versioned) -> dict:
-    return {"system": f"{codes.LOCAL_ID}/{kind}", "value": f"{record.ref.id}/v{record.ref.version}"}
+def record_identifier(kind: str, record_id: str) -> dict:
+    """A record's stable identifier (its version goes in meta.versionId)."""
+    return {"system": f"{codes.LOCAL_ID}/{kind}", "value": record_id}
+
+
+def version_meta(record: Versioned) -> dict:
+    return {"versionId": str(record.ref.version)}
 
 
 def patient(record: Versioned[Patient]) -> dict:
@@ -42,7 +47,8 @@ def patient(record: Versioned[Patient]) -> dict:
     out: dict = {
         "resourceType": "Patient",
         "id": p.id,
-        "identifier": [record_identifier("patient", record)],
+        "meta": version_meta(record),
+        "identifier": [record_identifier("patient", p.id)],
         "gender": codes.GENDER[p.sex],
     }
     if p.medical_record_number:
@@ -61,7 +67,8 @@ def encounter(record: Versioned[Encounter], subject: dict, conditions: list[dict
     out = {
         "resourceType": "Encounter",
         "id": e.id,
-        "identifier": [record_identifier("encounter", record)],
+        "meta": version_meta(record),
+        "identifier": [record_identifier("encounter", e.id)],
         "status": "unknown",  # burnedge records the arrival, not the discharge
         "class": coding(codes.ENCOUNTER_CLASS[e.mode]),
         "subject": subject,
@@ -97,8 +104,11 @@ def conditions(chart: Versioned[BurnChart] | None, enc: Versioned[Encounter], su
         local = (codes.LOCAL_DEPTH, entry.depth.value, depth)
         condition = {
             "resourceType": "Condition",
-            "id": resource_id("condition", chart.ref.id, str(chart.ref.version), entry.region.value),
-            "identifier": [record_identifier("burn-chart", chart)],
+            "id": resource_id("condition", chart.ref.id, str(chart.ref.version), entry.region.value, entry.depth.value),
+            "meta": version_meta(chart),
+            "identifier": [
+                record_identifier("burn-chart-entry", f"{chart.ref.id}/{entry.region.value}/{entry.depth.value}")
+            ],
             "clinicalStatus": concept((codes.CONDITION_CLINICAL, "active", "Active")),
             "verificationStatus": concept((codes.CONDITION_VERIFICATION, status, status.capitalize())),
             "category": [concept((codes.CONDITION_CATEGORY, "encounter-diagnosis", "Encounter Diagnosis"))],
@@ -142,14 +152,23 @@ def quantity(value: float, unit: str, decimals: int = 2) -> dict:
     return {"value": round(value, decimals), "unit": unit, "system": codes.UCUM, "code": unit}
 
 
-def assessment_observations(record: Versioned[Assessment] | None, subject: dict, enc: dict) -> list[dict]:
-    """%TBSA (Lund-Browder), body surface area, and the weight and height they were computed with."""
+def assessment_observations(
+    record: Versioned[Assessment] | None,
+    chart: Versioned[BurnChart] | None,
+    encounter_record: Versioned[Encounter],
+    subject: dict,
+    enc: dict,
+) -> list[dict]:
+    """%TBSA (Lund-Browder), dated when the chart was drawn; body surface area with the weight and height it was
+    computed from, dated at the encounter; each with the calculator's caveats."""
     if record is None:
         return []
     a, key = record.value, f"{record.ref.id}/v{record.ref.version}"
+    caveats = [{"text": c} for c in (*a.provenance, *a.caveats)]
     out = []
     if a.tbsa is not None:
-        tbsa = _observation(f"{key}/tbsa", codes.TBSA_BURNED, subject, enc, a.as_of, "exam")
+        charted = chart.value.assessed_at if chart else a.as_of
+        tbsa = _observation(f"{key}/tbsa", codes.TBSA_BURNED, subject, enc, charted, "exam")
         tbsa["valueQuantity"] = quantity(a.tbsa.tbsa_percent, "%", 1)
         tbsa["method"] = {"text": f"{a.tbsa.method} chart ({a.tbsa.age_adjustment}), superficial burns excluded"}
         tbsa["component"] = [
@@ -163,11 +182,16 @@ def assessment_observations(record: Versioned[Assessment] | None, subject: dict,
             ("weight", codes.BODY_WEIGHT, a.bsa.weight_kg, "kg"),
             ("height", codes.BODY_HEIGHT, a.bsa.height_cm, "cm"),
         ):
-            obs = _observation(f"{key}/{name}", code, subject, enc, a.as_of, "vital-signs")
+            when = encounter_record.value.time_of_arrival
+            obs = _observation(f"{key}/{name}", code, subject, enc, when, "vital-signs")
             obs["valueQuantity"] = quantity(value, unit)
             if name == "bsa":
                 obs["method"] = {"text": a.bsa.method}
             out.append(obs)
+    for obs in out:
+        obs["issued"] = iso(a.computed_at)
+        if caveats:
+            obs["note"] = caveats
     return out
 
 
@@ -188,8 +212,9 @@ def communications(consultations: list[Versioned[Consultation]], subject: dict, 
                 "received": iso(record.value.received_at),
                 "sender": {"display": f"{note.consultant} ({note.center_id})"},
                 "payload": [
-                    {"contentString": f"Recommendation: {note.recommendation.value}. {note.advice}"},
-                    {"contentString": note.notice},
+                    {"contentString": text}
+                    for text in (f"Recommendation: {note.recommendation.value}. {note.advice}", note.notice)
+                    if text.strip()
                 ],
             }
         )

@@ -17,12 +17,13 @@ from processing.fhir import codes
 from processing.fhir.codes import concept
 from processing.fhir.record import iso, quantity, ref, resource_id
 from processing.report.inputs import AnalysisPage
-from schemas.analysis import ModelSummary
+from schemas.analysis import AnalysisStatus, ModelSummary
 from schemas.segmentation import MaskSource
 
 RELIEF_TEXT = (
     "Surface relief: the deepest point of the burn's surface below a surface fitted to the healthy skin around "
-    "it, measured in 3D from photographs. Geometry, not the clinical burn depth (see the Condition's category)."
+    "it, measured in 3D from photographs. Geometry, not the clinical burn depth (the Conditions' code gives the "
+    "clinician's depth category)."
 )
 VOLUME_TEXT = "Sunken volume between the fitted healthy-skin surface and the burn's surface: a proxy, not tissue loss."
 
@@ -53,13 +54,15 @@ def _attachment(file: Attached) -> dict:
 
 
 def _sha256_identifier(file: Attached) -> dict:
-    return {"system": "urn:ietf:rfc:6920", "value": f"ni:///sha-256;{file.sha256}"}
+    """The file's SHA-256 as an RFC 6920 name (base64url, no padding)."""
+    digest = base64.urlsafe_b64encode(bytes.fromhex(file.sha256)).decode().rstrip("=")
+    return {"system": "urn:ietf:rfc:3986", "value": f"ni:///sha-256;{digest}"}
 
 
-def media(file: Attached, subject: dict, enc: dict) -> dict:
+def media(file: Attached, subject: dict, enc: dict, job_id: str) -> dict:
     out = {
         "resourceType": "Media",
-        "id": resource_id("media", file.sha256),
+        "id": resource_id("media", job_id, file.sha256),
         "identifier": [_sha256_identifier(file)],
         "status": "completed",
         "type": concept((codes.MEDIA_TYPE, "image", "Image")),
@@ -92,8 +95,8 @@ def mask_method(page: AnalysisPage, model: ModelSummary | None) -> str:
     by_model = len(views) - drawn
     parts = []
     if by_model:
-        name = model.version if model and model.version else "burnedge's segmentation model"
-        parts.append(f"{by_model} by the segmentation model {name}" + (f" (sha256 {model.sha256})" if model else ""))
+        name = f"the segmentation model {model.version}" if model and model.version else "burnedge's segmentation model"
+        parts.append(f"{by_model} by {name}" + (f" (sha256 {model.sha256})" if model else ""))
     if drawn:
         parts.append(f"{drawn} drawn by a clinician")
     return "burn outline on the photos: " + ("; ".join(parts) or "none")
@@ -116,22 +119,27 @@ def wound_size(page: AnalysisPage, subject: dict, enc: dict, photos: list[dict],
     hours = result.hours_since_injury
     provisional = result.provisional is not False
     components = []
+    notes = [_confidence_note(page)]
     if m.area_cm2 is not None:
         components.append({"code": concept(codes.WOUND_AREA), "valueQuantity": quantity(m.area_cm2, "cm2")})
-    if m.relief_max_mm is not None:
+    if m.relief_max_mm is not None and m.relief_max_mm > 0:
         depth = concept(codes.WOUND_DEPTH, text=RELIEF_TEXT)
         components.append({"code": depth, "valueQuantity": quantity(m.relief_max_mm / 10, "cm", 3)})
+        notes.append("Surface relief (component 39127-6) is a geometric measure of the skin surface, not a burn depth.")
+    elif m.relief_max_mm is not None:
+        notes.append(
+            "The burn's surface is not below the healthy skin around it (raised or level): no relief is given."
+        )
     if m.volume_cm3 is not None:
         volume = concept(codes.WOUND_VOLUME, text=VOLUME_TEXT)
         components.append({"code": volume, "valueQuantity": quantity(m.volume_cm3, "mL", 3)})
     if m.perimeter_cm is not None:
         components.append({"code": concept(codes.WOUND_PERIMETER), "valueQuantity": quantity(m.perimeter_cm, "cm")})
-    notes = [
-        _confidence_note(page),
-        "Length and width are not measured by burnedge: they are left out.",
-        "Surface relief (component 39127-6) is a geometric measure of the skin surface, not a burn depth category.",
-    ]
-    if not components:
+    notes.append("Length and width are not measured by burnedge: they are left out.")
+    notes += list(result.notes)  # the analysis's own caveats travel with its figures, as in the report
+    if result.status is AnalysisStatus.failed:
+        notes.insert(0, f"The analysis failed: {result.reason or 'no reason recorded'}. No figure is given.")
+    elif not components and (result.scale is None or not result.scale.mm_per_unit):
         notes.insert(0, "No metric scale was found in the photos: no figure in cm, cm2 or mL is given.")
     if provisional:
         when = f"{hours:.0f} h after the injury" if hours is not None else "at an unknown time after the injury"
@@ -139,10 +147,8 @@ def wound_size(page: AnalysisPage, subject: dict, enc: dict, photos: list[dict],
     out = {
         "resourceType": "Observation",
         "id": resource_id("wound-size", value.job_id, str(page.analysis.ref.version)),
-        "meta": {"profile": [codes.WOUND_SIZE_PROFILE]},
-        "identifier": [
-            {"system": f"{codes.LOCAL_ID}/burn-analysis", "value": f"{value.job_id}/v{page.analysis.ref.version}"}
-        ],
+        "meta": {"profile": [codes.WOUND_SIZE_PROFILE], "versionId": str(page.analysis.ref.version)},
+        "identifier": [{"system": f"{codes.LOCAL_ID}/burn-analysis", "value": value.job_id}],
         "status": "preliminary" if provisional else "final",
         "category": [concept((codes.OBSERVATION_CATEGORY, "exam", "Exam"))],
         "code": concept(codes.WOUND_SIZE),
@@ -151,11 +157,12 @@ def wound_size(page: AnalysisPage, subject: dict, enc: dict, photos: list[dict],
         "effectiveDateTime": iso(value.captured.at) if value.captured else value.completed_at,
         "issued": value.completed_at,
         "method": concept(
-            codes.PHOTOGRAMMETRY, text=f"3D surface from {len(photos)} photographs; {mask_method(page, model)}"
+            codes.PHOTOGRAMMETRY, text=f"3D surface from {len(value.assets)} photographs; {mask_method(page, model)}"
         ),
         "note": [{"text": n} for n in notes],
-        "derivedFrom": [ref(p) for p in photos],
     }
+    if photos:
+        out["derivedFrom"] = [ref(p) for p in photos]
     if provisional:
         out["interpretation"] = [{"text": "provisional (under 72 h after the injury, or time unknown)"}]
     if components:
