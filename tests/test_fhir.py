@@ -214,3 +214,18 @@ def test_a_raised_burn_gets_no_relief_component_and_a_note_why():
     texts = " ".join(n["text"] for n in panel["note"])
     assert "not below the healthy skin" in texts and "relief and volume are uncertain" in texts
     model_of("Observation").model_validate(panel)
+
+
+def test_a_patient_and_an_encounter_sharing_a_record_id_are_two_resources(client, clin):
+    shared = uuid7()  # record ids are unique per kind, not across kinds (the API fuzzing found this)
+    patient = patient_body(patient_id=shared)
+    assert client.post("/api/v1/patients", json=patient, headers=clin).status_code == 201
+    encounter = encounter_body(shared, encounter_id=shared)
+    assert client.post("/api/v1/encounters", json=encounter, headers=clin).status_code == 201
+    r = _export(client, clin, shared)
+    assert r.status_code == 200, r.text
+    bundle = r.json()
+    assert len({e["fullUrl"] for e in bundle["entry"]}) == len(bundle["entry"])
+    (p,), (e,) = _of_type(bundle, "Patient"), _of_type(bundle, "Encounter")
+    assert p["identifier"][0]["value"] == e["identifier"][0]["value"] == shared and p["id"] != e["id"]
+    assert e["subject"] == {"reference": f"urn:uuid:{p['id']}"}

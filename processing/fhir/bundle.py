@@ -100,7 +100,7 @@ def build(inputs: ReportInputs, files: BundleFiles) -> dict:
     """The Bundle of the encounter in `inputs` and its patient's measured visits."""
     patient = record.patient(inputs.patient)
     subject = ref(patient)
-    enc = {"reference": f"urn:uuid:{inputs.encounter.value.id}"}
+    enc = {"reference": f"urn:uuid:{resource_id('encounter', inputs.encounter.value.id)}"}
     conditions = record.conditions(inputs.chart, inputs.encounter, subject)
     resources = [patient, record.encounter(inputs.encounter, subject, conditions), *conditions]
     resources += record.assessment_observations(inputs.assessment, inputs.chart, inputs.encounter, subject, enc)

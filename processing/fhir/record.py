@@ -15,14 +15,23 @@ from schemas.patient import Encounter, Patient
 from schemas.transfer import Consultation
 
 NAMESPACE = uuid.UUID("5b0c3f8e-4a51-5d0b-9a57-1f3c0e0b6d21")
-"""Ids of resources that are not records themselves (an Observation, a Media) are UUIDv5 under this, so the
-same record versions export to the same ids."""
+"""Every resource id is a UUIDv5 under this, of its kind and what it is made of: the same record versions export
+to the same ids, and a patient and an encounter that happen to share a record id still get two (the record id
+itself is the resource's identifier)."""
 PROVISIONAL_HOURS = 72.0
 
 
 def iso(moment: dt.datetime | str) -> str:
-    """An instant as FHIR writes it (ISO 8601 with its offset)."""
-    return moment if isinstance(moment, str) else moment.isoformat()
+    """An instant as FHIR writes it: ISO 8601 in UTC (FHIR allows offsets up to 14 h only; the records accept
+    any offset ISO 8601 does)."""
+    if isinstance(moment, str):
+        try:
+            moment = dt.datetime.fromisoformat(moment)
+        except ValueError:
+            return moment
+        if moment.tzinfo is None:
+            return moment.isoformat()
+    return moment.astimezone(dt.UTC).isoformat()
 
 
 def resource_id(*parts: str) -> str:
@@ -46,7 +55,7 @@ def patient(record: Versioned[Patient]) -> dict:
     p = record.value
     out: dict = {
         "resourceType": "Patient",
-        "id": p.id,
+        "id": resource_id("patient", p.id),
         "meta": version_meta(record),
         "identifier": [record_identifier("patient", p.id)],
         "gender": codes.GENDER[p.sex],
@@ -66,7 +75,7 @@ def encounter(record: Versioned[Encounter], subject: dict, conditions: list[dict
     e = record.value
     out = {
         "resourceType": "Encounter",
-        "id": e.id,
+        "id": resource_id("encounter", e.id),
         "meta": version_meta(record),
         "identifier": [record_identifier("encounter", e.id)],
         "status": "unknown",  # burnedge records the arrival, not the discharge
@@ -115,7 +124,7 @@ def conditions(chart: Versioned[BurnChart] | None, enc: Versioned[Encounter], su
             "code": concept(codes.DEPTH_SNOMED[entry.depth], local, text=f"{depth}, {site['text']}"),
             "bodySite": [site],
             "subject": subject,
-            "encounter": {"reference": f"urn:uuid:{enc.value.id}"},
+            "encounter": {"reference": f"urn:uuid:{resource_id('encounter', enc.value.id)}"},
             "recordedDate": iso(chart.value.assessed_at),
             "note": [
                 {
