@@ -23,18 +23,24 @@ def _check_target(config: Config, out: Path, example: str) -> None:
         raise InvalidInput(f"the folder {out.parent} does not exist")
 
 
-def write_report(config: Config, encounter_id: str, out: Path, made_by: str) -> dict:
-    """Make (or reuse) the report and write it to `out`; what was done, as the command prints it."""
-    from base.storage.durable import replace_atomically
+def _on_the_gateway(config: Config, out: Path, example: str, act):
+    """act(services) with the gateway's services over its database, after checking `out` can be written."""
     from gateway.dependencies import Services
     from gateway.storage.database import Database
 
-    _check_target(config, out, "report.pdf")
+    _check_target(config, out, example)
     db = Database.from_config(config.gateway)
     try:
-        made = Services.build(config, db).reports.make(None, encounter_id, made_by=made_by)
+        return act(Services.build(config, db))
     finally:
         db.close()
+
+
+def write_report(config: Config, encounter_id: str, out: Path, made_by: str) -> dict:
+    """Make (or reuse) the report and write it to `out`; what was done, as the command prints it."""
+    from base.storage.durable import replace_atomically
+
+    made = _on_the_gateway(config, out, "report.pdf", lambda s: s.reports.make(None, encounter_id, made_by=made_by))
     replace_atomically(out, made.pdf)
     return {"encounter_id": encounter_id, "out": str(out), "bytes": len(made.pdf), "made": made.made}
 
@@ -42,15 +48,10 @@ def write_report(config: Config, encounter_id: str, out: Path, made_by: str) -> 
 def write_fhir(config: Config, encounter_id: str, out: Path, made_by: str) -> dict:
     """Export the encounter as a FHIR R4 Bundle (JSON) to `out`; what was done, as the command prints it."""
     from base.storage.durable import replace_atomically
-    from gateway.dependencies import Services
-    from gateway.storage.database import Database
 
-    _check_target(config, out, "encounter.fhir.json")
-    db = Database.from_config(config.gateway)
-    try:
-        bundle = Services.build(config, db).fhir.export(None, encounter_id, made_by=made_by)
-    finally:
-        db.close()
+    bundle = _on_the_gateway(
+        config, out, "encounter.fhir.json", lambda s: s.fhir.export(None, encounter_id, made_by=made_by)
+    )
     data = json.dumps(bundle, ensure_ascii=False, indent=1).encode()
     replace_atomically(out, data)
     return {"encounter_id": encounter_id, "out": str(out), "bytes": len(data), "resources": len(bundle["entry"])}

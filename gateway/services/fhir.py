@@ -7,6 +7,7 @@ import datetime as dt
 import logging
 import re
 import sqlite3
+from pathlib import Path
 
 import msgspec
 
@@ -45,11 +46,8 @@ def _taken(asset: Asset) -> str | None:
     return None
 
 
-def _photo(store: MediaStore, asset: Asset) -> Attached:
-    taken = _taken(asset)
-    return attached(
-        store.blob(asset.sha256), f"/api/v1/assets/{asset.id}/file", asset.media_type.value, asset.filename, taken
-    )
+def _photo(path: Path, asset: Asset) -> Attached:
+    return attached(path, f"/api/v1/assets/{asset.id}/file", asset.media_type.value, asset.filename, _taken(asset))
 
 
 class FhirService:
@@ -70,7 +68,7 @@ class FhirService:
                 continue
             path = self.store.blob(asset.sha256)
             if path.is_file():
-                photos.append(_photo(self.store, asset))
+                photos.append(_photo(path, asset))
         folder = analysis_dir(self.config, value.job_id)
         surface = folder / SURFACE
         url = f"/api/v1/analyses/{value.job_id}/artifacts/{SURFACE}"
