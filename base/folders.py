@@ -8,7 +8,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from base.storage.dialect import is_postgres
 from schemas.config import CentralConfig, Config
+from schemas.errors import InvalidInput
 
 
 def beside(database: str | Path, setting: str, default_name: str) -> Path:
@@ -59,12 +61,20 @@ def keys_dir(config: Config) -> Path:
 
 def center_store_dir(central: CentralConfig) -> Path:
     """The burn center's received parts: [central] store_dir, or "burnedge-central-store" beside its database."""
-    return beside(central.database, central.store_dir, "burnedge-central-store")
+    return _center_folder(central, central.store_dir, "store_dir", "burnedge-central-store")
 
 
 def center_keys_dir(central: CentralConfig) -> Path:
     """The burn center's site keys: [central] keys_dir, or "burnedge-central-keys" beside its database."""
-    return beside(central.database, central.keys_dir, "burnedge-central-keys")
+    return _center_folder(central, central.keys_dir, "keys_dir", "burnedge-central-keys")
+
+
+def _center_folder(central: CentralConfig, setting: str, name: str, default_name: str) -> Path:
+    if not setting and is_postgres(central.database):
+        raise InvalidInput(
+            f"[central] {name} must be set when the database is PostgreSQL: there is no file to put it beside"
+        )
+    return beside(central.database, setting, default_name)
 
 
 def matching_files(folder: Path, patterns: tuple[str, ...]) -> list[str]:

@@ -15,7 +15,7 @@ from collections.abc import Callable
 import msgspec
 
 from base.storage import audit
-from base.storage.database import Database
+from base.storage.postgres import AnyDatabase
 from center.storage import anchors
 from schemas.audit import AuditAnchor, AuditHead
 from schemas.base import iso, utcnow
@@ -29,7 +29,7 @@ Verifier = Callable[[str, bytes, str], tuple[SignedEnvelope, SiteIdentity]]
 
 
 class AnchorBook:
-    def __init__(self, db: Database, keys: SiteKeys, verified: Verifier):
+    def __init__(self, db: AnyDatabase, keys: SiteKeys, verified: Verifier):
         self.db = db
         self.keys = keys
         self.verified = verified
@@ -59,7 +59,7 @@ class AnchorBook:
         return AnchorReply(status="anchored", anchor=self.keys.sign("audit-anchor", anchor))
 
 
-def accept_restore(db: Database, site_id: str, *, by: str, reason: str) -> dict:
+def accept_restore(db: AnyDatabase, site_id: str, *, by: str, reason: str) -> dict:
     """After a clinic was restored from a backup (a rollback on purpose): void its anchors, so its next round
     anchors the restored chain afresh. Audited; the voided anchors stay in the table."""
     with db.write() as conn:

@@ -20,6 +20,8 @@ from base.accounts.service import AccountService
 from base.folders import center_keys_dir, center_store_dir
 from base.storage import audit
 from base.storage.database import Database
+from base.storage.dialect import is_postgres
+from base.storage.postgres import AnyDatabase, PostgresDatabase
 from base.web.account_controllers import AdminController, AuthController
 from base.web.authentication import session_auth
 from base.web.errors import EXCEPTION_HANDLERS
@@ -35,7 +37,7 @@ from center.endpoint import Endpoint
 from center.files import PartStore
 from center.pages import NAV, SITE_NAME, TEMPLATES, page_controllers
 from center.receiver import Receiver
-from center.storage.migrations import central_migrations
+from center.storage.migrations import CENTER_STEPS, CENTRAL_SET, central_migrations
 from schemas.accounts import Role
 from schemas.audit import AuditVerification
 from schemas.base import utcnow
@@ -49,7 +51,16 @@ from sync.keys import SiteKeys, load_keys
 log = logging.getLogger("burnedge.central")
 
 
-def open_center_db(central: CentralConfig) -> Database:
+def open_center_db(central: CentralConfig) -> AnyDatabase:
+    """The configured database, its schema brought up to date (several workers may start together)."""
+    if is_postgres(central.database):
+        db = PostgresDatabase(central.database, max_connections=central.database_connections)
+        try:
+            db.migrate(CENTRAL_SET, CENTER_STEPS)
+        except BaseException:
+            db.close()
+            raise
+        return db
     db = Database(central.database)
     db.migrate(central_migrations)
     return db
@@ -61,14 +72,14 @@ class CentralServices:
     account, audit and health handlers."""
 
     config: Config
-    db: Database
+    db: AnyDatabase
     keys: SiteKeys
     accounts: AccountService
     cases: CaseService
     receiver: Receiver
 
     @classmethod
-    def build(cls, config: Config, db: Database) -> CentralServices:
+    def build(cls, config: Config, db: AnyDatabase) -> CentralServices:
         store_dir = center_store_dir(config.central)
         keys = load_keys(center_keys_dir(config.central))
         return cls(
@@ -85,7 +96,7 @@ class CentralServices:
         if principal is not None:
             require_admin(principal, "read_audit")
         with self.db.read() as conn:
-            return audit.verify(conn, None)
+            return audit.verify(conn, None, served_records=False)
 
 
 CentralDep = Annotated["CentralServices", Dependency(skip_validation=True)]

@@ -7,7 +7,7 @@ import uuid
 
 from base.accounts.permissions import Principal
 from base.storage import accounts, audit
-from base.storage.database import Database
+from base.storage.postgres import AnyDatabase
 from center.files import PartStore
 from center.storage import cases, notes, rejections
 from schemas.accounts import Role
@@ -23,7 +23,7 @@ READERS = frozenset({Role.consultant, Role.clinician})
 
 
 class CaseService:
-    def __init__(self, db: Database, keys: SiteKeys, parts: PartStore):
+    def __init__(self, db: AnyDatabase, keys: SiteKeys, parts: PartStore):
         self.db = db
         self.keys = keys
         self.parts = parts

@@ -13,7 +13,7 @@ from concurrent.futures import ThreadPoolExecutor
 import msgspec
 import zenoh
 
-from base.storage.database import Database
+from base.storage.postgres import AnyDatabase
 from center.anchors import AnchorBook
 from center.receiver import Receiver
 from center.storage import rejections
@@ -31,7 +31,7 @@ _SHA = re.compile(r"\A[0-9a-f]{64}\Z")
 
 
 class Endpoint:
-    def __init__(self, db: Database, config: CentralConfig, receiver: Receiver):
+    def __init__(self, db: AnyDatabase, config: CentralConfig, receiver: Receiver):
         self.db = db
         self.config = config
         self.receiver = receiver

@@ -3,6 +3,10 @@
 Chunks are staged as files under their bundle until commit; a bundle is stored (part files, rows, receipt) in
 one transaction after every part was decrypted and checked, so nothing partial is ever stored. Whatever a
 clinic re-sends, each bundle version is stored once: a stored bundle is answered with its receipt again.
+
+Several workers may share one PostgreSQL database and one store folder: any of them may take any message of a
+transfer. The database's uniqueness constraints decide a race: the worker whose commit loses answers with the
+winner's receipt.
 """
 
 from __future__ import annotations
@@ -12,20 +16,19 @@ import hashlib
 import logging
 import os
 import shutil
-import sqlite3
 import threading
 from pathlib import Path
 
 import msgspec
 
 from base.storage import audit
-from base.storage.database import Database
+from base.storage.postgres import AnyDatabase
 from center.files import PartStore
 from center.storage import cases, notes, transfers
 from schemas.base import iso, utcnow
 from schemas.central import Announcement
 from schemas.config import CentralConfig
-from schemas.errors import TransferRejected
+from schemas.errors import DuplicateRow, TransferRejected
 from schemas.transfer import (
     PROTOCOL,
     AnnounceReply,
@@ -49,7 +52,7 @@ MAIL_PAGE = 100
 
 
 class Receiver:
-    def __init__(self, db: Database, config: CentralConfig, keys: SiteKeys, store_dir: Path):
+    def __init__(self, db: AnyDatabase, config: CentralConfig, keys: SiteKeys, store_dir: Path):
         self.db = db
         self.config = config
         self.keys = keys
@@ -100,6 +103,8 @@ class Receiver:
 
     # chunk --------------------------------------------------------------------------
     def chunk(self, site_id: str, bundle_id: str, index: int, sha256: str, payload: bytes) -> None:
+        if (site_id, bundle_id) not in self._manifests and self._stored(site_id, bundle_id):
+            return  # another worker committed the bundle while this chunk was on its way: nothing is missing
         manifest = self._incoming(site_id, bundle_id)
         if not 0 <= index < len(manifest.chunks):
             raise TransferRejected(f"bundle {bundle_id} has no chunk {index}", code="bad-chunk-index")
@@ -119,7 +124,7 @@ class Receiver:
             )
         folder = self.staging / site_id / bundle_id
         folder.mkdir(parents=True, exist_ok=True)
-        tmp = folder / f"{index:06d}.{threading.get_ident()}.tmp"
+        tmp = folder / f"{index:06d}.{os.getpid()}-{threading.get_ident()}.tmp"
         tmp.write_bytes(payload)
         # Not synced: a chunk lost in a crash is reported missing at commit and sent again.
         os.replace(tmp, folder / f"{index:06d}.chunk")
@@ -127,27 +132,43 @@ class Receiver:
     # commit -------------------------------------------------------------------------
     def commit(self, site_id: str, bundle_id: str) -> CommitReply:
         with self._lock(site_id, bundle_id):
-            stored = cases.find_receipt(self.db.connection(), site_id, bundle_id)
+            stored = self._stored(site_id, bundle_id)
             if stored is not None:
                 return CommitReply(status="stored", receipt=stored)
-            manifest = self._incoming(site_id, bundle_id)
-            folder = self.staging / site_id / bundle_id
-            # Read once: checked against the manifest here (an unsynced chunk may have been lost or damaged in a
-            # crash), then decrypted from the same bytes.
-            chunks = [_staged(folder / f"{i:06d}.chunk") for i in range(len(manifest.chunks))]
-            missing = [
-                i
-                for i, (data, ref) in enumerate(zip(chunks, manifest.chunks, strict=True))
-                if hashlib.sha256(data).hexdigest() != ref.sha256
-            ]
-            if missing:
-                return CommitReply(status="missing", missing=missing)
             try:
-                receipt = self._store(site_id, manifest, folder, chunks)
+                return self._commit(site_id, bundle_id)
             except TransferRejected:
-                self._drop_incoming(site_id, bundle_id)  # the bundle itself is bad: nothing of it is kept
-                raise
-            return CommitReply(status="stored", receipt=receipt)
+                stored = self._stored(site_id, bundle_id)
+                if stored is None:
+                    raise
+                log.info("bundle %s from %s was stored by another worker meanwhile", bundle_id, site_id)
+                return CommitReply(status="stored", receipt=stored)
+
+    def _stored(self, site_id: str, bundle_id: str) -> SignedEnvelope | None:
+        return cases.find_receipt(self.db.connection(), site_id, bundle_id)
+
+    def _commit(self, site_id: str, bundle_id: str) -> CommitReply:
+        manifest = self._incoming(site_id, bundle_id)
+        folder = self.staging / site_id / bundle_id
+        # Read once: checked against the manifest here (an unsynced chunk may have been lost or damaged in a
+        # crash), then decrypted from the same bytes.
+        chunks = [_staged(folder / f"{i:06d}.chunk") for i in range(len(manifest.chunks))]
+        missing = [
+            i
+            for i, (data, ref) in enumerate(zip(chunks, manifest.chunks, strict=True))
+            if hashlib.sha256(data).hexdigest() != ref.sha256
+        ]
+        if missing:
+            stored = self._stored(site_id, bundle_id)  # another worker may have stored it and cleared the folder
+            if stored is not None:
+                return CommitReply(status="stored", receipt=stored)
+            return CommitReply(status="missing", missing=missing)
+        try:
+            receipt = self._store(site_id, manifest, folder, chunks)
+        except TransferRejected:
+            self._drop_incoming(site_id, bundle_id)  # the bundle itself is bad: nothing of it is kept
+            raise
+        return CommitReply(status="stored", receipt=receipt)
 
     def _store(self, site_id: str, transfer: TransferManifest, folder: Path, chunks: list[bytes]) -> SignedEnvelope:
         key = unseal_key(transfer.sealed_key, self.keys.box)
@@ -177,7 +198,7 @@ class Receiver:
         )
         try:
             self._insert(site_id, manifest, announced.manifest_sha256, receipt)
-        except sqlite3.IntegrityError as exc:
+        except DuplicateRow as exc:  # commit() tells a worker's race (the same bundle) from a replay
             raise TransferRejected(
                 f"version {manifest.version} of encounter {manifest.encounter_id} is already "
                 "stored from another bundle: a replay",
@@ -277,7 +298,7 @@ class Receiver:
                 f"bundle {m.bundle_id} has chunks over {self.config.max_chunk_kib} KiB", code="too-large"
             )
 
-    def _check_version(self, conn: sqlite3.Connection, site_id: str, m: TransferManifest) -> None:
+    def _check_version(self, conn, site_id: str, m: TransferManifest) -> None:
         latest = cases.latest_of_encounter(conn, site_id, m.encounter_id)
         if latest is not None and latest.version >= m.version:
             raise TransferRejected(

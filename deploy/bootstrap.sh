@@ -2,14 +2,15 @@
 # Prepares this checkout on a fresh Debian machine: the system libraries the native
 # wheels load (open3d needs libusb, EGL/GL and X11 client libraries), a virtual
 # environment in .venv, and the project with its test tools. Safe to run again.
-# --test also installs Debian's chromium, the headless browser the page tests drive (Playwright).
+# --test also installs Debian's chromium, the headless browser the page tests drive (Playwright), and its
+# postgresql, the server the burn center's PostgreSQL tests start in a temporary folder (harness/postgres.py).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 PYTHON=${PYTHON:-python3}
 SYSTEM_PACKAGES=(libusb-1.0-0 libgl1 libegl1 libx11-6 libudev1 libgomp1 poppler-utils)
 case "${1:-}" in
-    --test) SYSTEM_PACKAGES+=(chromium) ;;
+    --test) SYSTEM_PACKAGES+=(chromium postgresql) ;;
     "") ;;
     *)
         echo "bootstrap: unknown argument $1 (the only one is --test)" >&2

@@ -59,10 +59,14 @@ def record_case(
 
 
 class CenterProcess:
-    def __init__(self, folder: Path, zenoh_port: int, http_port: int):
+    """`burnedge central` on loopback, over a SQLite file in `folder` or the PostgreSQL database `database`."""
+
+    def __init__(self, folder: Path, zenoh_port: int, http_port: int, database: str | None = None):
         self.folder = folder
         self.env = {
-            "BURNEDGE_CENTRAL_DATABASE": str(folder / "center.sqlite3"),
+            "BURNEDGE_CENTRAL_DATABASE": database or str(folder / "center.sqlite3"),
+            "BURNEDGE_CENTRAL_STORE_DIR": str(folder / "burnedge-central-store"),
+            "BURNEDGE_CENTRAL_KEYS_DIR": str(folder / "burnedge-central-keys"),
             "BURNEDGE_CENTRAL_LISTEN_ENDPOINTS": f"tcp/127.0.0.1:{zenoh_port}",
             "BURNEDGE_CENTRAL_PORT": str(http_port),
         }
@@ -82,6 +86,10 @@ class CenterProcess:
         wait_healthy(self.proc, self.url, self.log, timeout, "center")
         return self
 
+    def rows(self, sql: str, params: tuple = ()) -> list:
+        """The center database's answer to a query, read as the IT person's tools would (either backend)."""
+        return query_rows(self.env["BURNEDGE_CENTRAL_DATABASE"], sql, params)
+
     def kill(self) -> None:
         if self.proc and self.proc.poll() is None:
             self.proc.send_signal(signal.SIGKILL)
@@ -99,10 +107,17 @@ class CenterProcess:
 class Sites:
     """Both sites' files under `folder`; neither process is started."""
 
-    def __init__(self, folder: Path, *, center_endpoint: str | None = None, zenoh_port: int | None = None):
+    def __init__(
+        self,
+        folder: Path,
+        *,
+        center_endpoint: str | None = None,
+        zenoh_port: int | None = None,
+        center_database: str | None = None,
+    ):
         self.folder = folder
         self.zenoh_port = zenoh_port or free_port()
-        self.center = CenterProcess(folder, self.zenoh_port, free_port())
+        self.center = CenterProcess(folder, self.zenoh_port, free_port(), center_database)
         self.gateway = GatewayProcess(folder / "clinic.sqlite3", free_port())
         self.gateway.env.update(
             {
@@ -154,6 +169,19 @@ class Sites:
     def stop(self) -> None:
         self.gateway.stop()
         self.center.stop()
+
+
+def query_rows(database: str, sql: str, params: tuple = ()) -> list:
+    """Rows of one query on a center database, a SQLite path or a PostgreSQL URL (`?` placeholders)."""
+    from base.storage.database import Database
+    from base.storage.dialect import is_postgres
+    from base.storage.postgres import PostgresDatabase
+
+    db = PostgresDatabase(database, max_connections=2) if is_postgres(database) else Database(database)
+    try:
+        return [tuple(row) for row in db.connection().execute(sql, params).fetchall()]
+    finally:
+        db.close()
 
 
 def wait_for(predicate, timeout: float, what: str, every: float = 0.2):

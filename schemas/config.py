@@ -452,11 +452,18 @@ class CentralConfig(Message):
     """The burn center's server (`burnedge central`)."""
 
     database: str = "burnedge-central.sqlite3"
-    """SQLite file of received cases, consultants' accounts and notes."""
+    """Database of received cases, consultants' accounts and notes: a SQLite file's path (one worker), or a
+    PostgreSQL URL such as "postgresql://burnedge@/burnedge?host=/run/postgresql" (several workers; keep the
+    password in ~/.pgpass or PGPASSFILE, not here)."""
+    database_connections: Annotated[int, msgspec.Meta(ge=2, le=200)] = 12
+    """Most connections a worker opens to PostgreSQL (unused with SQLite); the server's max_connections must hold
+    this times the number of workers, plus the command line's."""
     store_dir: str = ""
-    """Folder of received bundles' files; empty means "burnedge-central-store" beside the database."""
+    """Folder of received bundles' files; empty means "burnedge-central-store" beside the database (required when
+    the database is a PostgreSQL URL; every worker must see the same folder)."""
     keys_dir: str = ""
-    """Folder of the center's keys; empty means "burnedge-central-keys" beside the database."""
+    """Folder of the center's keys; empty means "burnedge-central-keys" beside the database (required when the
+    database is a PostgreSQL URL)."""
     listen_endpoints: list[str] = msgspec.field(default_factory=lambda: ["tcp/0.0.0.0:7447"])
     """Zenoh endpoints clinics connect to (use tls/... with certificates in `zenoh_config` on the internet)."""
     zenoh_config: str = ""

@@ -66,6 +66,14 @@ class Conflict(BurnedgeError):
     title = "Conflict"
 
 
+class DuplicateRow(Conflict):
+    """A row with the same key is stored already (a uniqueness constraint refused the insert); raised by both
+    databases' write transactions, after rolling back, so callers tell "someone else stored it" from a fault."""
+
+    slug = "duplicate"
+    title = "Already stored"
+
+
 class VersionMismatch(Conflict):
     """Optimistic concurrency: the client edited a version that is no longer current."""
 

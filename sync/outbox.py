@@ -10,7 +10,6 @@ from __future__ import annotations
 import hashlib
 import logging
 import shutil
-import sqlite3
 import threading
 import uuid
 
@@ -22,7 +21,7 @@ from base.storage.database import Database
 from base.storage.durable import fsync_dir, write_file
 from schemas.base import iso, utcnow
 from schemas.config import Config
-from schemas.errors import Conflict
+from schemas.errors import Conflict, DuplicateRow
 from schemas.transfer import PROTOCOL, OutboxBundle, OutboxEntry, OutboxState, SignedEnvelope, TransferManifest
 from sync import bundle, case_snapshot, peers
 from sync.keys import SiteKeys
@@ -111,7 +110,7 @@ class Outbox:
                         detail=f"bundle {bundle_id} version {version} for "
                         f"{center.site_id} ({len(manifest.parts)} parts), by {user}",
                     )
-            except sqlite3.IntegrityError as exc:
+            except DuplicateRow as exc:
                 shutil.rmtree(self.root / bundle_id, ignore_errors=True)
                 raise Conflict(f"version {version} of encounter {encounter_id} was queued meanwhile") from exc
             except BaseException:

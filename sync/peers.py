@@ -5,7 +5,7 @@ from __future__ import annotations
 import sqlite3
 
 from base.storage import audit
-from base.storage.database import Database
+from base.storage.postgres import AnyDatabase
 from schemas.base import iso, utcnow
 from schemas.errors import Conflict, NotFound, TransferRejected
 from schemas.transfer import Peer, SiteIdentity, SiteRole
@@ -13,7 +13,7 @@ from sync.keys import check_identity, fingerprint
 from sync.storage import peers as store
 
 
-def enrol(db: Database, identity: SiteIdentity, *, by: str, replace: bool = False) -> Peer:
+def enrol(db: AnyDatabase, identity: SiteIdentity, *, by: str, replace: bool = False) -> Peer:
     """Trust `identity`; an enrolled site's keys are only replaced with `replace` (after the site made new keys)."""
     check_identity(identity)
     now = iso(utcnow())
@@ -37,7 +37,7 @@ def enrol(db: Database, identity: SiteIdentity, *, by: str, replace: bool = Fals
         return store.get(conn, identity.site_id)
 
 
-def revoke(db: Database, site_id: str, *, reason: str, by: str) -> Peer:
+def revoke(db: AnyDatabase, site_id: str, *, reason: str, by: str) -> Peer:
     """Stop trusting a site: everything it signs from now on is rejected; what it sent before stays readable."""
     with db.write() as conn:
         store.get(conn, site_id)
@@ -54,7 +54,7 @@ def revoke(db: Database, site_id: str, *, reason: str, by: str) -> Peer:
         return store.get(conn, site_id)
 
 
-def list_peers(db: Database) -> list[Peer]:
+def list_peers(db: AnyDatabase) -> list[Peer]:
     return store.list_all(db.connection())
 
 

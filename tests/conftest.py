@@ -72,6 +72,34 @@ def sites(tmp_path: Path):
     sites.stop()
 
 
+@pytest.fixture(scope="session")
+def postgres_server():
+    """A real PostgreSQL server for the whole session, started on first use (Debian's packages, a temporary folder,
+    loopback). Skipped only on a machine without it and without root; as root the bootstrap installs it, so there
+    it must be found."""
+    import os
+
+    from harness.postgres import PostgresMissing, PostgresServer
+
+    try:
+        server = PostgresServer()
+    except PostgresMissing as exc:
+        if os.geteuid() == 0:
+            raise
+        pytest.skip(f"{exc}; tests of the center's PostgreSQL backend skipped")
+    server.start()
+    yield server
+    server.stop()
+
+
+@pytest.fixture(params=["sqlite", "postgres"])
+def center_database(request, tmp_path: Path) -> str:
+    """[central] database for a test run against both backends: a SQLite file, or a fresh PostgreSQL database."""
+    if request.param == "sqlite":
+        return str(tmp_path / "center.sqlite3")
+    return request.getfixturevalue("postgres_server").create_database("center")
+
+
 def open_db(path: str | Path) -> Database:
     return Database(path)
 

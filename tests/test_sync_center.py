@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import sqlite3
 from pathlib import Path
 
 import pytest
@@ -17,6 +16,15 @@ pytestmark = pytest.mark.server
 def delivered(client, encounter_id: str, version: int):
     entries = client.get(f"/api/v1/encounters/{encounter_id}/transfers", "transfers")
     return next((e for e in entries if e["version"] == version and e["state"] == "delivered"), None)
+
+
+@pytest.fixture
+def sites(tmp_path: Path, center_database: str):
+    """Both sites set up, the center on SQLite or on PostgreSQL."""
+    sites = Sites(tmp_path, center_database=center_database)
+    sites.set_up()
+    yield sites
+    sites.stop()
 
 
 def test_case_arrives_intact_and_advice_comes_back(sites: Sites, tmp_path: Path):
@@ -84,9 +92,8 @@ def test_case_arrives_intact_and_advice_comes_back(sites: Sites, tmp_path: Path)
     assert [(c["bundle_id"], c["version"]) for c in latest] == [(second["bundle_id"], 2)]
     everything = center.get("/api/v1/cases?include_superseded=true", "all versions")
     assert {c["version"]: c["superseded_by"] for c in everything} == {1: second["bundle_id"], 2: None}
-    with sqlite3.connect(sites.center.env["BURNEDGE_CENTRAL_DATABASE"]) as db:
-        assert db.execute("SELECT COUNT(*) FROM bundles").fetchone()[0] == 2
-        assert db.execute("SELECT COUNT(*) FROM incoming").fetchone()[0] == 0
+    assert sites.center.rows("SELECT COUNT(*) FROM bundles") == [(2,)]
+    assert sites.center.rows("SELECT COUNT(*) FROM incoming") == [(0,)]
 
 
 def sent_chunks(client, encounter_id: str) -> int:
@@ -94,12 +101,17 @@ def sent_chunks(client, encounter_id: str) -> int:
     return entries[0]["sent_chunks"] if entries and entries[0]["state"] == "queued" else 0
 
 
-def test_sigkill_of_either_side_mid_transfer_still_stores_each_bundle_once(tmp_path: Path):
+def test_sigkill_of_either_side_mid_transfer_still_stores_each_bundle_once(tmp_path: Path, center_database: str):
     from harness.poor_link import ThrottlingProxy
 
     zenoh_port = free_port()
     with ThrottlingProxy("127.0.0.1", zenoh_port, rate_kbit=4000) as proxy:  # ~1 s per 0.5 MB: time to kill
-        sites = Sites(tmp_path, center_endpoint=f"tcp/127.0.0.1:{proxy.port}", zenoh_port=zenoh_port)
+        sites = Sites(
+            tmp_path,
+            center_endpoint=f"tcp/127.0.0.1:{proxy.port}",
+            zenoh_port=zenoh_port,
+            center_database=center_database,
+        )
         sites.gateway.env["BURNEDGE_SYNC_CHUNK_KIB"] = "64"
         sites.set_up()
         try:
@@ -133,10 +145,9 @@ def test_sigkill_of_either_side_mid_transfer_still_stores_each_bundle_once(tmp_p
                 assert got == sorted(p.read_bytes() for p in photos)
         finally:
             sites.stop()
-    with sqlite3.connect(sites.center.env["BURNEDGE_CENTRAL_DATABASE"]) as db:
-        rows = db.execute("SELECT bundle_id, COUNT(*) FROM bundles GROUP BY bundle_id").fetchall()
-        assert sorted(r[0] for r in rows) == sorted([one["bundle_id"], two["bundle_id"]])
-        assert all(count == 1 for _, count in rows)
-        assert db.execute("SELECT COUNT(*) FROM incoming").fetchone()[0] == 0
+    rows = sites.center.rows("SELECT bundle_id, COUNT(*) FROM bundles GROUP BY bundle_id")
+    assert sorted(r[0] for r in rows) == sorted([one["bundle_id"], two["bundle_id"]])
+    assert all(count == 1 for _, count in rows)
+    assert sites.center.rows("SELECT COUNT(*) FROM incoming") == [(0,)]
     staging = tmp_path / "burnedge-central-store" / "incoming"
     assert not any(p.is_file() for p in staging.rglob("*")), "staged chunks left behind"

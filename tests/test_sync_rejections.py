@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import hashlib
 import json
-import sqlite3
 import uuid
 from pathlib import Path
 
@@ -13,69 +12,20 @@ import msgspec
 import pytest
 import zenoh
 
+from harness.center_bundles import make_bundle
 from harness.sites import CENTER, CLINIC, Sites, cli
 from schemas.transfer import (
-    PROTOCOL,
     AnnounceReply,
-    BundleManifest,
-    CaseSummary,
     CommitReply,
     SiteIdentity,
     SiteRole,
     TransferManifest,
-    Urgency,
 )
-from sync import bundle
 from sync.keys import SiteKeys, init_keys, load_keys
-from sync.sealing import seal
 from sync.wire import request
 from sync.zenoh_link import Keys
 
 pytestmark = pytest.mark.server
-SUMMARY = CaseSummary(
-    urgency=Urgency.routine,
-    urgency_reasons=[],
-    encounter_mode="emergency",
-    age_years=30.0,
-    tbsa_percent=2.0,
-    analyses=0,
-    area_cm2=None,
-    analysis_confidence=None,
-)
-
-
-def make_bundle(keys: SiteKeys, center: SiteIdentity, encounter_id: str, version: int, chunk_size: int = 4096):
-    bundle_id = str(uuid.uuid4())
-    parts = [
-        bundle.PartData("record.json", json.dumps({"encounter": encounter_id}).encode()),
-        bundle.PartData("photos/a.jpg", bytes(range(256)) * 64),
-    ]
-    manifest = BundleManifest(
-        bundle_id=bundle_id,
-        site_id=keys.site_id,
-        patient_id=str(uuid.uuid4()),
-        encounter_id=encounter_id,
-        version=version,
-        supersedes=None,
-        created_at="2026-11-22",
-        created_by="clin",
-        summary=SUMMARY,
-        parts=[p.described for p in parts],
-    )
-    sealed = seal(bundle.pack(manifest, parts), bytes.fromhex(center.box_key), bundle_id, chunk_size)
-    announcement = TransferManifest(
-        protocol=PROTOCOL,
-        bundle_id=bundle_id,
-        site_id=keys.site_id,
-        center_id=center.site_id,
-        encounter_id=encounter_id,
-        version=version,
-        created_at="2026-11-22",
-        sealed_key=sealed.sealed_key,
-        plain_size=0,
-        chunks=sealed.refs,
-    )
-    return bundle_id, msgspec.msgpack.encode(keys.sign("manifest", announcement)), sealed
 
 
 class Clinic:
@@ -109,8 +59,8 @@ def refused(call, code: str) -> str:
     return caught.value.detail
 
 
-def test_every_bad_input_is_refused_and_nothing_partial_is_stored(tmp_path: Path):
-    sites = Sites(tmp_path)
+def test_every_bad_input_is_refused_and_nothing_partial_is_stored(tmp_path: Path, center_database: str):
+    sites = Sites(tmp_path, center_database=center_database)
     sites.set_up()
     # A second clinic, enrolled then revoked; and a stranger nobody enrolled.
     revoked = init_keys(tmp_path / "revoked-keys", "clinic-revoked", SiteRole.clinic, "Revoked clinic")
@@ -193,19 +143,18 @@ def test_every_bad_input_is_refused_and_nothing_partial_is_stored(tmp_path: Path
     finally:
         sites.center.stop()
 
-    with sqlite3.connect(sites.center.env["BURNEDGE_CENTRAL_DATABASE"]) as db:
-        assert sorted(r[0] for r in db.execute("SELECT version FROM bundles")) == [1, 2]
-        assert db.execute("SELECT COUNT(*) FROM incoming").fetchone()[0] == 0
-        codes = {r[0] for r in db.execute("SELECT code FROM rejections")}
-        assert {
-            "garbage",
-            "bad-signature",
-            "unknown-site",
-            "revoked-site",
-            "unannounced",
-            "chunk-mismatch",
-            "chunk-size",
-            "replayed",
-            "chunk-forged",
-        } <= codes
+    assert sorted(r[0] for r in sites.center.rows("SELECT version FROM bundles")) == [1, 2]
+    assert sites.center.rows("SELECT COUNT(*) FROM incoming") == [(0,)]
+    codes = {r[0] for r in sites.center.rows("SELECT code FROM rejections")}
+    assert {
+        "garbage",
+        "bad-signature",
+        "unknown-site",
+        "revoked-site",
+        "unannounced",
+        "chunk-mismatch",
+        "chunk-size",
+        "replayed",
+        "chunk-forged",
+    } <= codes
     assert not any(p.is_file() for p in (tmp_path / "burnedge-central-store" / "incoming").rglob("*"))

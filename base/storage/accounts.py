@@ -293,7 +293,7 @@ def take_back_one_attempt(conn: sqlite3.Connection, keys: Iterable[str], free_fa
     """Count one attempt less against each key, unlocking a key whose lock only this attempt had set."""
     # SET expressions see the old row: the lock goes only if this attempt was what crossed the limit.
     conn.executemany(
-        "UPDATE login_throttle SET failures = MAX(failures - 1, 0),"
+        "UPDATE login_throttle SET failures = CASE WHEN failures > 0 THEN failures - 1 ELSE 0 END,"
         " locked_until = CASE WHEN failures - 1 <= ? THEN NULL ELSE locked_until END WHERE key = ?",
         [(free_failures, k) for k in keys],
     )

@@ -20,7 +20,9 @@ import sqlite_utils
 from sqlite_utils import Migrations
 
 from schemas.config import GatewayConfig
-from schemas.errors import StorageError
+from schemas.errors import DuplicateRow, StorageError
+
+_DUPLICATE_KEY = ("SQLITE_CONSTRAINT_PRIMARYKEY", "SQLITE_CONSTRAINT_UNIQUE")
 
 
 class _ThreadConnection:
@@ -94,6 +96,8 @@ class Database:
             # SQLite may already have rolled back by itself (disk full, I/O error).
             if conn.in_transaction:
                 conn.execute("ROLLBACK")
+            if getattr(exc, "sqlite_errorname", "") in _DUPLICATE_KEY:
+                raise DuplicateRow(f"already stored: {exc}") from exc
             if isinstance(exc, sqlite3.IntegrityError) or not isinstance(exc, sqlite3.DatabaseError):
                 raise
             raise StorageError(f"the database could not store this change, nothing was written: {exc}") from exc

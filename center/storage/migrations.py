@@ -1,5 +1,8 @@
-"""Schema of the center's SQLite file: consultants' accounts and the audit trail (as at a gateway), enrolled
-clinics, transfers in progress, stored bundles, notes on their way back and rejections."""
+"""Schema of the center's database: consultants' accounts and the audit trail (as at a gateway), enrolled clinics,
+transfers in progress, stored bundles, notes on their way back and rejections.
+
+Each step is written once, in SQLite's DDL; on PostgreSQL the same statements run with its column types
+(base/storage/dialect.py). CENTER_STEPS is the order both databases apply them in."""
 
 from __future__ import annotations
 
@@ -8,10 +11,9 @@ from sqlite_utils import Database, Migrations
 from base.storage import schema
 from sync.storage.peers import PEERS_DDL
 
-central_migrations = Migrations("burnedge-central")
+CENTRAL_SET = "burnedge-central"
 
 
-@central_migrations()
 def c001_center(db: Database) -> None:
     schema.create_accounts(db)
     schema.create_audit_log(db)
@@ -92,7 +94,6 @@ def c001_center(db: Database) -> None:
     )
 
 
-@central_migrations()
 def c002_audit_anchors(db: Database) -> None:
     """Every audit-chain head a clinic had anchored: a later head must still run through the newest one that is
     not voided (a site restored from a backup has its anchors voided by the center's IT person, audited)."""
@@ -110,7 +111,12 @@ def c002_audit_anchors(db: Database) -> None:
     db.execute("CREATE INDEX audit_anchors_site ON audit_anchors (site_id, seq)")
 
 
-@central_migrations()
 def c003_must_change_password(db: Database) -> None:
     """Consultants' accounts share the gateway's account code: an administrator's reset forces a change."""
     schema.add_must_change_password(db)
+
+
+CENTER_STEPS = (c001_center, c002_audit_anchors, c003_must_change_password)
+central_migrations = Migrations(CENTRAL_SET)
+for _step in CENTER_STEPS:
+    central_migrations()(_step)

@@ -27,9 +27,9 @@ def encounter_notes(conn: sqlite3.Connection, site_id: str, encounter_id: str) -
 
 def insert_note(conn: sqlite3.Connection, site_id: str, note: ConsultationNote) -> int:
     """Store a note for the site, not sealed yet; its sequence number in the site's mail."""
-    cur = conn.execute(
+    row = conn.execute(
         "INSERT INTO notes (note_id, site_id, encounter_id, bundle_id, consultant_user_id, note,"
-        " written_at) VALUES (?,?,?,?,?,?,?)",
+        " written_at) VALUES (?,?,?,?,?,?,?) RETURNING seq",
         (
             note.note_id,
             site_id,
@@ -39,8 +39,8 @@ def insert_note(conn: sqlite3.Connection, site_id: str, note: ConsultationNote) 
             msgspec.json.encode(note).decode(),
             note.written_at,
         ),
-    )
-    return cur.lastrowid
+    ).fetchone()
+    return row["seq"]
 
 
 def attach_sealed(conn: sqlite3.Connection, seq: int, message: SignedEnvelope) -> None:
@@ -60,7 +60,8 @@ def record_poll(conn: sqlite3.Connection, site_id: str, acked_seq: int, at: str)
     """The site polled its mail at `at`, having stored its notes up to `acked_seq` (a cursor never goes back)."""
     conn.execute(
         "INSERT INTO mail_cursors (site_id, acked_seq, last_poll_at) VALUES (?,?,?) ON CONFLICT"
-        " (site_id) DO UPDATE SET acked_seq = MAX(acked_seq, excluded.acked_seq),"
+        " (site_id) DO UPDATE SET acked_seq = CASE WHEN excluded.acked_seq > mail_cursors.acked_seq"
+        " THEN excluded.acked_seq ELSE mail_cursors.acked_seq END,"
         " last_poll_at = excluded.last_poll_at",
         (site_id, acked_seq, at),
     )

@@ -40,7 +40,7 @@ def insert_queued(
     created_at: str,
     created_by: str,
 ) -> None:
-    """Add a sealed bundle in state queued; sqlite3.IntegrityError when that version was queued meanwhile."""
+    """Add a sealed bundle in state queued; schemas.errors.DuplicateRow (from the write transaction) when that version was queued meanwhile."""
     conn.execute(
         "INSERT INTO outbox (bundle_id, encounter_id, version, center_id, content_digest, state,"
         " envelope, chunks, bytes, created_at, created_by) VALUES (?,?,?,?,?,?,?,?,?,?,?)",
