@@ -12,7 +12,7 @@ from litestar import Controller, Litestar, Response, get, post
 from litestar.datastructures import State
 from litestar.di import Provide
 from litestar.openapi import OpenAPIConfig
-from litestar.params import Dependency, FromPath, JSONBody, QueryParameter
+from litestar.params import Dependency, FromPath, JSONBody
 
 from base import __version__
 from base.accounts.permissions import Principal, require_admin
@@ -31,6 +31,7 @@ from base.web.pages.assets import static_files
 from base.web.pages.protection import csrf_protection, security_headers
 from base.web.pages.rendering import NAV_KEY, SITE_NAME_KEY, template_config
 from base.web.paths import IdPath, SiteIdPath
+from base.web.query import query_struct
 from base.web.site import AuthedRequest
 from center.cases import CaseService
 from center.endpoint import Endpoint
@@ -41,7 +42,7 @@ from center.storage.migrations import CENTER_STEPS, CENTRAL_SET, central_migrati
 from schemas.accounts import Role
 from schemas.audit import AuditVerification
 from schemas.base import utcnow
-from schemas.central import CaseDetail, CaseItem, NoteRequest, NoteStatus, RejectionItem
+from schemas.central import CaseDetail, CaseFilter, CasePage, NoteRequest, NoteStatus, RejectionItem
 from schemas.config import CentralConfig, Config
 from schemas.errors import Forbidden
 from schemas.transfer import Peer
@@ -106,14 +107,16 @@ class CaseController(Controller):
     path = "/api/v1/cases"
     tags = ["cases"]
 
-    @get("/", sync_to_thread=False, summary="Incoming cases: awaiting advice first, then by urgency, oldest first")
-    def list_cases(
-        self,
-        request: AuthedRequest,
-        services: CentralDep,
-        include_superseded: Annotated[bool, QueryParameter()] = False,
-    ) -> list[CaseItem]:
-        return services.cases.list_cases(request.user, include_superseded=include_superseded)
+    @get(
+        "/",
+        sync_to_thread=False,
+        summary="Incoming cases, a page at a time: awaiting advice first, then by urgency, oldest first",
+        description="Query parameters, all optional: urgency, site_id, state (awaiting, advised, superseded), "
+        "include_superseded, received_from and received_to (YYYY-MM-DD, UTC), limit (1-200, default 50), after "
+        "(the previous page's next_after). Each given filter must match.",
+    )
+    def list_cases(self, request: AuthedRequest, services: CentralDep) -> CasePage:
+        return services.cases.list_cases(request.user, query_struct(request, CaseFilter))
 
     @get("/{site_id:str}/{bundle_id:str}", sync_to_thread=False, summary="A case: summary, parts, versions, notes")
     def case(self, site_id: SiteIdPath, bundle_id: IdPath, request: AuthedRequest, services: CentralDep) -> CaseDetail:

@@ -9,10 +9,10 @@ from base.accounts.permissions import Principal
 from base.storage import accounts, audit
 from base.storage.postgres import AnyDatabase
 from center.files import PartStore
-from center.storage import cases, notes, rejections
+from center.storage import case_queue, cases, notes, rejections
 from schemas.accounts import Role
 from schemas.base import iso, utcnow
-from schemas.central import CaseDetail, CaseItem, NoteRequest, NoteStatus, RejectionItem
+from schemas.central import CaseDetail, CaseFilter, CasePage, NoteRequest, NoteStatus, RejectionItem
 from schemas.errors import Forbidden, NotFound, TransferRejected
 from schemas.transfer import ConsultationNote, SiteIdentity, SiteRole
 from sync import peers
@@ -28,14 +28,14 @@ class CaseService:
         self.keys = keys
         self.parts = parts
 
-    def list_cases(self, who: Principal, *, include_superseded: bool = False, limit: int = 200) -> list[CaseItem]:
-        """Latest version of each case; awaiting advice first, then most urgent, then longest waiting."""
+    def list_cases(self, who: Principal, wanted: CaseFilter | None = None) -> CasePage:
+        """A page of the cases the filter picks: awaiting advice first, then most urgent, then longest waiting."""
         _require(who, READERS)
-        items = cases.list_cases(self.db.connection())
-        if not include_superseded:
-            items = [i for i in items if i.superseded_by is None]
-        items.sort(key=lambda i: (not i.awaiting_advice,))  # stable: urgency order kept within each group
-        return items[:limit]
+        wanted = wanted or CaseFilter()
+        with self.db.read() as conn:
+            items, next_after = case_queue.page_of_cases(conn, wanted)
+            total = case_queue.count_cases(conn, wanted)
+        return CasePage(cases=items, total=total, next_after=next_after)
 
     def case(self, who: Principal, site_id: str, bundle_id: str) -> CaseDetail:
         _require(who, READERS)

@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+import datetime as dt
+import enum
+from typing import Annotated
+
 import msgspec
 
 from schemas.audit import AuditHead
@@ -27,6 +31,48 @@ class CaseItem(Frozen):
     """Notes written on this encounter so far."""
     awaiting_advice: bool
     """No note has been written since this version arrived."""
+
+
+class CaseState(enum.StrEnum):
+    """Where a received version stands with the consultants."""
+
+    awaiting = "awaiting"
+    """The latest version of its case, and no note has been written since it arrived."""
+    advised = "advised"
+    """The latest version of its case, with a note written since it arrived."""
+    superseded = "superseded"
+    """A newer version of the same case has arrived; this one stays readable."""
+
+
+class CaseFilter(Message):
+    """Which cases a page of the consultants' list holds: every filter given must match."""
+
+    urgency: Urgency | None = None
+    """Only cases of this urgency."""
+    site_id: SiteId | None = None
+    """Only cases from this clinic (its site id)."""
+    state: CaseState | None = None
+    """Only cases in this state. Unset: the latest version of every case (awaiting and advised)."""
+    include_superseded: bool = False
+    """With no state given, also list the versions a newer one replaced."""
+    received_from: dt.date | None = None
+    """Only versions the center received on or after this day (UTC)."""
+    received_to: dt.date | None = None
+    """Only versions the center received on or before this day (UTC)."""
+    limit: Annotated[int, msgspec.Meta(ge=1, le=200)] = 50
+    """How many cases a page holds."""
+    after: Annotated[str, msgspec.Meta(max_length=400)] | None = None
+    """The `next_after` of the previous page: the list goes on from there."""
+
+
+class CasePage(Frozen):
+    """One page of the consultants' list: awaiting advice first, then most urgent, then longest waiting."""
+
+    cases: list[CaseItem]
+    total: int
+    """Cases matching the filter, on every page together."""
+    next_after: str | None
+    """Pass as `after` for the next page; None on the last page."""
 
 
 class NoteStatus(Frozen):

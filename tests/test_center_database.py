@@ -6,21 +6,31 @@ locks and caches, so nothing but the database keeps them from storing a bundle t
 
 from __future__ import annotations
 
+import datetime as dt
 import threading
 import uuid
 from pathlib import Path
 
+import msgspec
 import pytest
 
+from base.accounts.permissions import Principal
 from base.folders import center_store_dir
 from center.app import CentralServices, open_center_db
+from center.cases import CaseService
+from center.files import PartStore
 from center.receiver import Receiver
+from harness.case_seed import enrol_clinics, seed_cases
 from harness.center_bundles import make_bundle
+from schemas.accounts import Role
+from schemas.central import CaseFilter, CaseState
 from schemas.config import CentralConfig, Config
 from schemas.errors import InvalidInput, TransferRejected
-from schemas.transfer import SiteRole
+from schemas.transfer import URGENCY_ORDER, SiteRole, Urgency
 from sync import peers
 from sync.keys import init_keys
+
+CONSULTANT = Principal("u-consultant", "consult", Role.consultant, None, "session")
 
 
 @pytest.fixture
@@ -74,7 +84,12 @@ def test_migrations_apply_once_and_a_second_open_finds_nothing_to_do(center, cen
         if center_database.startswith("postgresql://"):
             assert again.migrate("burnedge-central", []) == []
             applied = again.connection().execute("SELECT name FROM burnedge_migrations ORDER BY name").fetchall()
-            assert [r[0] for r in applied] == ["c001_center", "c002_audit_anchors", "c003_must_change_password"]
+            assert [r[0] for r in applied] == [
+                "c001_center",
+                "c002_audit_anchors",
+                "c003_must_change_password",
+                "c004_case_queue",
+            ]
     finally:
         again.close()
 
@@ -130,3 +145,96 @@ def test_a_postgres_center_names_its_folders_or_says_which_setting_is_missing(tm
     central = CentralConfig(database="postgresql://burnedge@127.0.0.1:1/none")
     with pytest.raises(InvalidInput, match=r"\[central\] store_dir must be set"):
         center_store_dir(central)
+
+
+def reference_order(conn) -> list[tuple]:
+    """Every stored version worked out from the raw rows, not the maintained columns: (site, bundle, urgency rank,
+    stored_at, superseded, awaiting)."""
+    bundles = conn.execute("SELECT site_id, bundle_id, encounter_id, version, urgency_rank, stored_at FROM bundles")
+    bundles = bundles.fetchall()
+    written = conn.execute("SELECT site_id, encounter_id, written_at FROM notes").fetchall()
+    newest: dict[tuple, int] = {}
+    for b in bundles:
+        key = (b["site_id"], b["encounter_id"])
+        newest[key] = max(newest.get(key, 0), b["version"])
+    rows = []
+    for b in bundles:
+        key = (b["site_id"], b["encounter_id"])
+        advised = any((n["site_id"], n["encounter_id"]) == key and n["written_at"] >= b["stored_at"] for n in written)
+        rows.append(
+            (b["site_id"], b["bundle_id"], b["urgency_rank"], b["stored_at"], b["version"] < newest[key], not advised)
+        )
+    return sorted(rows, key=lambda r: (not r[5], r[2], r[3], r[0], r[1]))
+
+
+def every_page(service: CaseService, wanted: CaseFilter) -> tuple[list, set[int]]:
+    seen, totals, after = [], set(), wanted.after
+    while True:
+        page = service.list_cases(CONSULTANT, msgspec.structs.replace(wanted, after=after))
+        seen.extend(page.cases)
+        totals.add(page.total)
+        if page.next_after is None:
+            return seen, totals
+        assert len(page.cases) == wanted.limit
+        after = page.next_after
+
+
+@pytest.fixture
+def seeded(center, tmp_path: Path):
+    central, db, keys, _ = center
+    site_ids = enrol_clinics(db, tmp_path / "seed-keys", 3)
+    seed_cases(db, keys, site_ids, 320, batch=80)
+    return CaseService(db, keys, PartStore(tmp_path / "parts")), db, site_ids
+
+
+def test_the_case_list_pages_through_every_filter_in_order_with_nothing_missed_or_repeated(seeded):
+    service, db, site_ids = seeded
+    everything = reference_order(db.connection())
+    assert 40 < sum(r[4] for r in everything) < 120 and 60 < sum(not r[5] for r in everything) < 200  # a real mix
+
+    def expect(keep) -> list[tuple[str, str]]:
+        return [(r[0], r[1]) for r in everything if keep(r)]
+
+    day_one, day_two = dt.date(2026, 1, 1), dt.date(2026, 1, 2)  # 320 cases a few minutes apart: over a day
+    immediate, clinic = URGENCY_ORDER[Urgency.immediate], site_ids[1]
+    cases = [
+        (CaseFilter(limit=37), lambda r: not r[4]),
+        (CaseFilter(limit=50, include_superseded=True), lambda r: True),
+        (CaseFilter(limit=20, state=CaseState.awaiting), lambda r: not r[4] and r[5]),
+        (CaseFilter(limit=20, state=CaseState.advised), lambda r: not r[4] and not r[5]),
+        (CaseFilter(limit=9, state=CaseState.superseded), lambda r: r[4]),
+        (
+            CaseFilter(limit=7, urgency=Urgency.immediate, site_id=clinic),
+            lambda r: not r[4] and r[2] == immediate and r[0] == clinic,
+        ),
+        (CaseFilter(limit=30, received_to=day_one), lambda r: not r[4] and r[3][:10] == "2026-01-01"),
+        (
+            CaseFilter(limit=11, received_from=day_two, received_to=day_two),
+            lambda r: not r[4] and r[3][:10] == "2026-01-02",
+        ),
+    ]
+    for wanted, keep in cases:
+        expected = expect(keep)
+        seen, totals = every_page(service, wanted)
+        assert expected, wanted
+        assert [(c.site_id, c.bundle_id) for c in seen] == expected, wanted
+        assert totals == {len(expected)}, wanted
+
+
+def test_a_case_arriving_between_pages_neither_repeats_nor_hides_the_rest(seeded, center):
+    service, db, site_ids = seeded
+    _, _, keys, _ = center
+    old = {(r[0], r[1]) for r in reference_order(db.connection()) if not r[4]}
+    first = service.list_cases(CONSULTANT, CaseFilter(limit=25))
+    seed_cases(db, keys, site_ids, 5, seed=99)  # new encounters, awaiting, landing ahead of the cursor and after it
+    rest, _ = every_page(service, CaseFilter(limit=25, after=first.next_after))
+    seen = [(c.site_id, c.bundle_id) for c in first.cases + rest]
+    assert len(seen) == len(set(seen))
+    assert old <= set(seen)
+
+
+def test_a_cursor_the_list_did_not_hand_out_is_refused_in_words(seeded):
+    service, _, _ = seeded
+    for after in ("not-a-cursor", "AAAA", "kgE"):
+        with pytest.raises(InvalidInput, match="next_after"):
+            service.list_cases(CONSULTANT, CaseFilter(after=after))

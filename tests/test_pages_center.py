@@ -173,6 +173,22 @@ def test_the_case_list_shows_the_received_case_by_urgency_with_its_clinic_and_ag
     assert "Latest versions only" in consultant.get("/cases?include_superseded=true").text
 
 
+def test_the_case_list_filters_by_urgency_and_clinic_and_says_what_is_wrong_with_a_filter(pair, consultant):
+    picked = consultant.get("/cases", params={"urgency": "immediate", "site_id": "clinic-test", "state": ""})
+    assert picked.status_code == 200 and f'href="{pair.case_url}"' in picked.text
+    assert "1 case matches these filters" in picked.text and '<option value="immediate" selected>' in picked.text
+    none = consultant.get("/cases", params={"urgency": "routine"})
+    assert none.status_code == 200 and pair.case_url not in none.text and "No case matches these filters" in none.text
+    wrong = consultant.get("/cases", params={"received_from": "4 March"})
+    assert wrong.status_code == 422 and "received_from" in wrong.text and "YYYY-MM-DD" in wrong.text
+    api = consultant.get("/api/v1/cases", params={"limit": "0"})
+    assert api.status_code == 422 and api.json()["errors"] == [{"field": "$.limit", "message": "Expected `int` >= 1"}]
+    unknown = consultant.get("/api/v1/cases", params={"sort": "name"}).json()
+    assert unknown["detail"] == "query parameter `sort`: not a parameter this list takes"
+    page = consultant.get("/api/v1/cases", params={"limit": "1"}).json()
+    assert page["total"] == 1 and page["next_after"] is None and len(page["cases"]) == 1
+
+
 def test_the_case_page_shows_the_record_the_viewer_photos_report_and_versions(pair, consultant):
     page = consultant.get(pair.case_url)
     assert page.status_code == 200

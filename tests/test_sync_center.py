@@ -39,7 +39,7 @@ def test_case_arrives_intact_and_advice_comes_back(sites: Sites, tmp_path: Path)
     assert entry["bundle_id"] == sent.json()["bundle_id"]
 
     center = sites.center_client()
-    cases = center.get("/api/v1/cases", "cases")
+    cases = center.get("/api/v1/cases", "cases")["cases"]
     assert [c["encounter_id"] for c in cases] == [encounter_id]
     assert cases[0]["awaiting_advice"] and cases[0]["site_name"] == "Test field clinic"
     detail = center.get(f"/api/v1/cases/{cases[0]['site_id']}/{entry['bundle_id']}", "case")
@@ -88,9 +88,9 @@ def test_case_arrives_intact_and_advice_comes_back(sites: Sites, tmp_path: Path)
     clinic.upload(noise_photo(tmp_path / "later.jpg", 99), encounter_id)
     assert clinic.http.post(f"/api/v1/encounters/{encounter_id}/transfers").json()["version"] == 2
     second = wait_for(lambda: delivered(clinic, encounter_id, 2), 30, "delivery of version 2")
-    latest = center.get("/api/v1/cases", "cases")
+    latest = center.get("/api/v1/cases", "cases")["cases"]
     assert [(c["bundle_id"], c["version"]) for c in latest] == [(second["bundle_id"], 2)]
-    everything = center.get("/api/v1/cases?include_superseded=true", "all versions")
+    everything = center.get("/api/v1/cases?include_superseded=true", "all versions")["cases"]
     assert {c["version"]: c["superseded_by"] for c in everything} == {1: second["bundle_id"], 2: None}
     assert sites.center.rows("SELECT COUNT(*) FROM bundles") == [(2,)]
     assert sites.center.rows("SELECT COUNT(*) FROM incoming") == [(0,)]

@@ -8,12 +8,12 @@ from pathlib import Path
 import msgspec
 import pytest
 
+from harness.center_bundles import SUMMARY
 from schemas.errors import InvalidInput, TransferRejected
 from schemas.transfer import SiteRole
 from sync import bundle
 from sync.keys import check_identity, fingerprint, init_keys, load_keys
 from sync.sealing import open_chunks, seal, unseal_key
-from harness.center_bundles import SUMMARY
 
 
 def test_keys_are_kept_private_and_their_identity_is_self_signed(tmp_path: Path):

@@ -239,10 +239,10 @@ def check_center_serves(db_path: Path, before: Snapshot) -> None:
     try:
         with TestClient(create_central_app(config, services)) as client:
             consultant, admin = login(client, "consult"), login(client, "centeradmin")
-            latest = client.get("/api/v1/cases", headers=consultant).json()
+            latest = client.get("/api/v1/cases", headers=consultant).json()["cases"]
             newest = next(b for b in bundles if not any(o["supersedes"] == b["bundle_id"] for o in bundles))
             assert [(c["bundle_id"], c["version"]) for c in latest] == [(newest["bundle_id"], newest["version"])]
-            every = client.get("/api/v1/cases", params={"include_superseded": True}, headers=consultant).json()
+            every = client.get("/api/v1/cases", params={"include_superseded": True}, headers=consultant).json()["cases"]
             assert sorted(c["bundle_id"] for c in every) == sorted(b["bundle_id"] for b in bundles)
             for b in bundles:
                 case = f"/api/v1/cases/{b['site_id']}/{b['bundle_id']}"

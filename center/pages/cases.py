@@ -4,21 +4,26 @@ from __future__ import annotations
 
 import datetime as dt
 from typing import Annotated, Any
+from urllib.parse import urlencode
 
+import msgspec
 from litestar import Controller, get, post
-from litestar.params import Dependency, QueryParameter
+from litestar.params import Dependency
 from litestar.response import Redirect, Template
 
 from base.web.pages.forms import FormBody, FormInvalid, field_errors, form_fields, parse_form
 from base.web.pages.rendering import page
 from base.web.paths import IdPath, SiteIdPath
+from base.web.query import query_struct
 from base.web.site import AuthedRequest
 from center.pages.case_view import case_view
 from schemas.accounts import Role
-from schemas.central import NoteRequest
+from schemas.central import CaseFilter, CasePage, CaseState, NoteRequest
+from schemas.errors import InvalidInput
+from schemas.transfer import SiteRole, Urgency
+from sync.peers import list_peers
 
 CentralServicesDep = Annotated[Any, Dependency(skip_validation=True)]
-Superseded = Annotated[bool, QueryParameter(description="Also list versions a newer one replaced")]
 
 
 def age(stored_at: str) -> str:
@@ -35,6 +40,30 @@ def age(stored_at: str) -> str:
     return f"{minutes // 1440} days ago"
 
 
+def _list_view(request, wanted: CaseFilter, shown: CasePage, clinics, problem: str | None) -> dict:
+    """What cases.html shows: the page of cases, the filter as chosen, and links to the next and first page."""
+    chosen = {k: v for k, v in msgspec.to_builtins(wanted).items() if k not in ("after", "limit") and v}
+    query = {**chosen, **({"limit": wanted.limit} if wanted.limit != CaseFilter().limit else {})}
+    return {
+        "cases": shown.cases,
+        "total": shown.total,
+        "wanted": wanted,
+        "filtered": bool(chosen.keys() - {"include_superseded"}),
+        "clinics": clinics,
+        "urgencies": list(Urgency),
+        "states": list(CaseState),
+        "problem": problem,
+        "next_page": f"{request.url.path}?{urlencode({**query, 'after': shown.next_after})}"
+        if shown.next_after
+        else None,
+        "first_page": f"{request.url.path}?{urlencode(query)}" if wanted.after else None,
+        "toggle_superseded": urlencode(
+            {**chosen, "include_superseded": "false" if wanted.include_superseded else "true"}
+        ),
+        "age": age,
+    }
+
+
 class CasePages(Controller):
     path = "/"
     include_in_schema = False
@@ -44,11 +73,15 @@ class CasePages(Controller):
         return Redirect(path="/admin" if request.user.role == Role.admin else "/cases", status_code=303)
 
     @get("/cases", sync_to_thread=False)
-    def cases(
-        self, request: AuthedRequest, services: CentralServicesDep, include_superseded: Superseded = False
-    ) -> Template:
-        items = services.cases.list_cases(request.user, include_superseded=include_superseded)
-        return page(request, "cases.html", cases=items, include_superseded=include_superseded, age=age)
+    def cases(self, request: AuthedRequest, services: CentralServicesDep) -> Template:
+        clinics = [p for p in list_peers(services.db) if p.identity.role == SiteRole.clinic]
+        try:
+            wanted = query_struct(request, CaseFilter)
+        except InvalidInput as exc:
+            shown = CasePage(cases=[], total=0, next_after=None)
+            return page(request, "cases.html", 422, **_list_view(request, CaseFilter(), shown, clinics, exc.detail))
+        shown = services.cases.list_cases(request.user, wanted)
+        return page(request, "cases.html", **_list_view(request, wanted, shown, clinics, None))
 
     @get("/cases/{site_id:str}/{bundle_id:str}", sync_to_thread=True)
     def case(

@@ -19,17 +19,24 @@ from schemas.transfer import (
 )
 
 _envelope = msgspec.msgpack.Decoder(SignedEnvelope)
-_CASE_SQL = """
-    SELECT b.*, p.identity AS peer_identity,
-        (SELECT n.bundle_id FROM bundles n WHERE n.site_id = b.site_id AND n.encounter_id = b.encounter_id
-            AND n.version > b.version ORDER BY n.version DESC LIMIT 1) AS superseded_by,
-        (SELECT COUNT(*) FROM notes t WHERE t.site_id = b.site_id AND t.encounter_id = b.encounter_id) AS notes,
-        (SELECT COUNT(*) FROM notes t WHERE t.site_id = b.site_id AND t.encounter_id = b.encounter_id
-            AND t.written_at >= b.stored_at) AS notes_since
-    FROM bundles b JOIN peers p ON p.site_id = b.site_id"""
+_CASE_COLUMNS = """b.site_id, b.bundle_id, b.encounter_id, b.patient_id, b.version, b.urgency, b.summary,
+    b.stored_at, b.superseded_by, b.advised, p.identity AS peer_identity,
+    (SELECT COUNT(*) FROM notes t WHERE t.site_id = b.site_id AND t.encounter_id = b.encounter_id) AS notes"""
+CASE_SQL = f"SELECT {_CASE_COLUMNS} FROM bundles b JOIN peers p ON p.site_id = b.site_id"
+"""The columns case_item() reads, for a WHERE and ORDER BY on `b` (bundles) to follow."""
+_SUPERSEDE = (
+    "UPDATE bundles SET superseded_by = (SELECT n.bundle_id FROM bundles n WHERE n.site_id = bundles.site_id"
+    " AND n.encounter_id = bundles.encounter_id AND n.version > bundles.version ORDER BY n.version DESC LIMIT 1)"
+    " WHERE site_id = ? AND encounter_id = ?"
+)
+_ADVISED_ALREADY = (
+    "UPDATE bundles SET advised = 1 WHERE site_id = ? AND bundle_id = ? AND EXISTS (SELECT 1 FROM notes t"
+    " WHERE t.site_id = bundles.site_id AND t.encounter_id = bundles.encounter_id AND t.written_at >= bundles.stored_at)"
+)
 
 
-def _item(row: sqlite3.Row) -> CaseItem:
+def case_item(row: sqlite3.Row) -> CaseItem:
+    """A row of CASE_SQL as the consultants' list shows it."""
     identity = msgspec.json.decode(row["peer_identity"], type=SiteIdentity)
     return CaseItem(
         site_id=row["site_id"],
@@ -43,29 +50,28 @@ def _item(row: sqlite3.Row) -> CaseItem:
         stored_at=row["stored_at"],
         superseded_by=row["superseded_by"],
         notes=row["notes"],
-        awaiting_advice=row["notes_since"] == 0,
+        awaiting_advice=not row["advised"],
     )
-
-
-def list_cases(conn: sqlite3.Connection) -> list[CaseItem]:
-    """Every stored version of every case, most urgent first, then longest waiting."""
-    return [_item(r) for r in conn.execute(_CASE_SQL + " ORDER BY b.urgency_rank, b.stored_at").fetchall()]
 
 
 def find_case(conn: sqlite3.Connection, site_id: str, bundle_id: str) -> StoredCase | None:
     """The case this bundle holds, with its manifest, or None when no such bundle is stored."""
-    row = conn.execute(_CASE_SQL + " WHERE b.site_id = ? AND b.bundle_id = ?", (site_id, bundle_id)).fetchone()
+    row = conn.execute(
+        f"SELECT {_CASE_COLUMNS}, b.manifest FROM bundles b JOIN peers p ON p.site_id = b.site_id"
+        " WHERE b.site_id = ? AND b.bundle_id = ?",
+        (site_id, bundle_id),
+    ).fetchone()
     if row is None:
         return None
-    return StoredCase(case=_item(row), manifest=msgspec.json.decode(row["manifest"], type=BundleManifest))
+    return StoredCase(case=case_item(row), manifest=msgspec.json.decode(row["manifest"], type=BundleManifest))
 
 
 def case_versions(conn: sqlite3.Connection, site_id: str, encounter_id: str) -> list[CaseItem]:
     """Every stored version of the encounter's case, newest first."""
     rows = conn.execute(
-        _CASE_SQL + " WHERE b.site_id = ? AND b.encounter_id = ? ORDER BY b.version DESC", (site_id, encounter_id)
+        CASE_SQL + " WHERE b.site_id = ? AND b.encounter_id = ? ORDER BY b.version DESC", (site_id, encounter_id)
     ).fetchall()
-    return [_item(r) for r in rows]
+    return [case_item(r) for r in rows]
 
 
 def _bundle(row: sqlite3.Row) -> StoredBundle:
@@ -122,8 +128,8 @@ def insert_bundle(
     stored_at: str,
     receipt: SignedEnvelope,
 ) -> None:
-    """Store a bundle version and its parts' rows. sqlite3.IntegrityError when the site already stored this
-    version of the encounter from another bundle."""
+    """Store a bundle version and its parts' rows, and mark the versions it replaces. DuplicateRow when the site
+    already stored this version of the encounter from another bundle."""
     conn.execute(
         "INSERT INTO bundles (site_id, bundle_id, encounter_id, patient_id, version, supersedes, urgency,"
         " urgency_rank, summary, manifest, manifest_sha256, stored_at, receipt)"
@@ -148,3 +154,5 @@ def insert_bundle(
         "INSERT INTO bundle_parts (site_id, bundle_id, name, media_type, sha256, size) VALUES (?,?,?,?,?,?)",
         [(site_id, manifest.bundle_id, p.name, p.media_type, p.sha256, p.size) for p in manifest.parts],
     )
+    conn.execute(_SUPERSEDE, (site_id, manifest.encounter_id))
+    conn.execute(_ADVISED_ALREADY, (site_id, manifest.bundle_id))

@@ -26,7 +26,8 @@ def encounter_notes(conn: sqlite3.Connection, site_id: str, encounter_id: str) -
 
 
 def insert_note(conn: sqlite3.Connection, site_id: str, note: ConsultationNote) -> int:
-    """Store a note for the site, not sealed yet; its sequence number in the site's mail."""
+    """Store a note for the site, not sealed yet, marking the versions it advises on; its sequence number in the
+    site's mail."""
     row = conn.execute(
         "INSERT INTO notes (note_id, site_id, encounter_id, bundle_id, consultant_user_id, note,"
         " written_at) VALUES (?,?,?,?,?,?,?) RETURNING seq",
@@ -40,6 +41,10 @@ def insert_note(conn: sqlite3.Connection, site_id: str, note: ConsultationNote) 
             note.written_at,
         ),
     ).fetchone()
+    conn.execute(
+        "UPDATE bundles SET advised = 1 WHERE site_id = ? AND encounter_id = ? AND stored_at <= ? AND advised = 0",
+        (site_id, note.encounter_id, note.written_at),
+    )
     return row["seq"]
 
 
