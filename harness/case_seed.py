@@ -10,15 +10,44 @@ from pathlib import Path
 
 import msgspec
 
+from base.folders import center_keys_dir
 from base.storage.postgres import AnyDatabase
+from center.app import open_center_db
 from center.storage import cases, notes
 from harness.center_bundles import SUMMARY
+from harness.processes import PASSWORD, free_port
+from harness.sites import CENTER, CenterProcess, cli
 from schemas.base import iso
+from schemas.config import CentralConfig
 from schemas.transfer import BundleManifest, ConsultationNote, Receipt, Recommendation, SiteRole, Urgency
 from sync import peers
-from sync.keys import SiteKeys, init_keys
+from sync.keys import SiteKeys, init_keys, load_keys
 
 START = dt.datetime(2026, 1, 1, tzinfo=dt.UTC)
+
+
+def seeded_center(folder: Path, count: int, *, clinics: int = 3, database: str | None = None) -> CenterProcess:
+    """`burnedge central` (not started) over a database holding `count` cases from `clinics` clinics named
+    "Clinic 0", "Clinic 1"…, with the consultant `consult` (password PASSWORD)."""
+    center = CenterProcess(folder, free_port(), free_port(), database)
+    cli("keys", "init", "--center", "--site-id", CENTER, "--name", "Test burn center", env=center.env)
+    cli(
+        *("users", "add", "--center", "--username", "consult", "--role", "consultant", "--password-stdin"),
+        env=center.env,
+        stdin=PASSWORD + "\n",
+    )
+    central = CentralConfig(
+        database=center.env["BURNEDGE_CENTRAL_DATABASE"],
+        store_dir=center.env["BURNEDGE_CENTRAL_STORE_DIR"],
+        keys_dir=center.env["BURNEDGE_CENTRAL_KEYS_DIR"],
+    )
+    db = open_center_db(central)
+    try:
+        site_ids = enrol_clinics(db, folder / "clinic-keys", clinics)
+        seed_cases(db, load_keys(center_keys_dir(central)), site_ids, count)
+    finally:
+        db.close()
+    return center
 
 
 def enrol_clinics(db: AnyDatabase, keys_dir: Path, count: int) -> list[str]:

@@ -8,40 +8,17 @@ import re
 
 import pytest
 
-from base.folders import center_keys_dir
-from center.app import open_center_db
 from harness.browser import DESKTOP, PHONE, TABLET, browser_missing, launch, shot
-from harness.case_seed import enrol_clinics, seed_cases
-from harness.processes import PASSWORD, free_port
-from harness.sites import CENTER, CenterProcess, cli
-from schemas.config import CentralConfig
-from sync.keys import load_keys
+from harness.case_seed import seeded_center
+from harness.processes import PASSWORD
+from harness.sites import CenterProcess
 
 pytestmark = pytest.mark.skipif(bool(browser_missing()), reason=browser_missing() or "browser available")
 
 
 @pytest.fixture(scope="module")
 def center(tmp_path_factory):
-    folder = tmp_path_factory.mktemp("center")
-    center = CenterProcess(folder, free_port(), free_port())
-    cli("keys", "init", "--center", "--site-id", CENTER, "--name", "Test burn center", env=center.env)
-    cli(
-        *("users", "add", "--center", "--username", "consult", "--role", "consultant", "--password-stdin"),
-        env=center.env,
-        stdin=PASSWORD + "\n",
-    )
-    central = CentralConfig(
-        database=center.env["BURNEDGE_CENTRAL_DATABASE"],
-        store_dir=center.env["BURNEDGE_CENTRAL_STORE_DIR"],
-        keys_dir=center.env["BURNEDGE_CENTRAL_KEYS_DIR"],
-    )
-    db = open_center_db(central)
-    try:
-        site_ids = enrol_clinics(db, folder / "clinic-keys", 3)
-        seed_cases(db, load_keys(center_keys_dir(central)), site_ids, 130)
-    finally:
-        db.close()
-    center.start()
+    center = seeded_center(tmp_path_factory.mktemp("center"), 130).start()
     yield center
     center.stop()
 

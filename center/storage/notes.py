@@ -4,6 +4,7 @@ sealed for its clinic, and how far each clinic has confirmed it stored them."""
 from __future__ import annotations
 
 import sqlite3
+import time
 
 import msgspec
 
@@ -25,13 +26,23 @@ def encounter_notes(conn: sqlite3.Connection, site_id: str, encounter_id: str) -
     ]
 
 
+def _next_seq(conn: sqlite3.Connection) -> int:
+    # Numbered by the clock (microseconds), not by the table's counter: a clinic asks for the notes after the
+    # highest number it has read, and a database restored from a backup would count again from the backup's last
+    # number, below what clinics read before the loss, so they would never ask for new advice. The clock has moved
+    # on past every number given out before. Callers hold the write lock, so numbers stay unique and rising.
+    last = conn.execute("SELECT MAX(seq) FROM notes").fetchone()[0] or 0
+    return max(last + 1, time.time_ns() // 1000)
+
+
 def insert_note(conn: sqlite3.Connection, site_id: str, note: ConsultationNote) -> int:
     """Store a note for the site, not sealed yet, marking the versions it advises on; its sequence number in the
     site's mail."""
     row = conn.execute(
-        "INSERT INTO notes (note_id, site_id, encounter_id, bundle_id, consultant_user_id, note,"
-        " written_at) VALUES (?,?,?,?,?,?,?) RETURNING seq",
+        "INSERT INTO notes (seq, note_id, site_id, encounter_id, bundle_id, consultant_user_id, note,"
+        " written_at) VALUES (?,?,?,?,?,?,?,?) RETURNING seq",
         (
+            _next_seq(conn),
             note.note_id,
             site_id,
             note.encounter_id,
