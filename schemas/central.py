@@ -66,7 +66,8 @@ class CaseFilter(Message):
 
 
 class CasePage(Frozen):
-    """One page of the consultants' list: awaiting advice first, then most urgent, then longest waiting."""
+    """One page of the consultants' list: awaiting advice first, then most urgent, then longest waiting (superseded
+    versions, when listed, after every current one)."""
 
     cases: list[CaseItem]
     total: int

@@ -164,7 +164,7 @@ def reference_order(conn) -> list[tuple]:
         rows.append(
             (b["site_id"], b["bundle_id"], b["urgency_rank"], b["stored_at"], b["version"] < newest[key], not advised)
         )
-    return sorted(rows, key=lambda r: (not r[5], r[2], r[3], r[0], r[1]))
+    return sorted(rows, key=lambda r: (r[4], not r[5], r[2], r[3], r[0], r[1]))
 
 
 def every_page(service: CaseService, wanted: CaseFilter) -> tuple[list, set[int]]:

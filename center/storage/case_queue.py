@@ -15,9 +15,10 @@ from schemas.central import CaseFilter, CaseItem, CaseState
 from schemas.errors import InvalidInput
 from schemas.transfer import URGENCY_ORDER
 
-# The list's order, and the row value a cursor holds: awaiting advice first, then most urgent, longest waiting.
-_ORDER = ("b.advised", "b.urgency_rank", "b.stored_at", "b.site_id", "b.bundle_id")
-_Cursor = tuple[int, int, str, str, str]
+# The list's order, and the row value a cursor holds: the latest versions before superseded ones, awaiting advice
+# before advised, then most urgent, then longest waiting. It is the order of the index bundles_queue.
+_ORDER = ("b.superseded", "b.advised", "b.urgency_rank", "b.stored_at", "b.site_id", "b.bundle_id")
+_Cursor = tuple[int, int, int, str, str, str]
 _cursor = msgspec.msgpack.Decoder(_Cursor)
 
 
@@ -25,9 +26,9 @@ def _conditions(wanted: CaseFilter) -> tuple[list[str], list]:
     where: list[str] = []
     params: list = []
     if wanted.state is CaseState.superseded:
-        where.append("b.superseded_by IS NOT NULL")
+        where.append("b.superseded = 1")
     elif wanted.state is not None or not wanted.include_superseded:
-        where.append("b.superseded_by IS NULL")
+        where.append("b.superseded = 0")
     if wanted.state is CaseState.awaiting:
         where.append("b.advised = 0")
     elif wanted.state is CaseState.advised:
@@ -50,7 +51,14 @@ def _conditions(wanted: CaseFilter) -> tuple[list[str], list]:
 
 def encode_cursor(item: CaseItem) -> str:
     """Where the list goes on after this case, as the opaque text a page hands out."""
-    key = (0 if item.awaiting_advice else 1, URGENCY_ORDER[item.urgency], item.stored_at, item.site_id, item.bundle_id)
+    key = (
+        0 if item.superseded_by is None else 1,
+        0 if item.awaiting_advice else 1,
+        URGENCY_ORDER[item.urgency],
+        item.stored_at,
+        item.site_id,
+        item.bundle_id,
+    )
     return base64.urlsafe_b64encode(msgspec.msgpack.encode(key)).decode().rstrip("=")
 
 
@@ -75,7 +83,7 @@ def page_of_cases(conn: sqlite3.Connection, wanted: CaseFilter) -> tuple[list[Ca
     """The filter's page of cases in the list's order, and the cursor of the page after it (None on the last)."""
     where, params = _conditions(wanted)
     if wanted.after is not None:
-        where.append(f"({', '.join(_ORDER)}) > (?, ?, ?, ?, ?)")
+        where.append(f"({', '.join(_ORDER)}) > (?, ?, ?, ?, ?, ?)")
         params.extend(decode_cursor(wanted.after))
     sql = CASE_SQL + (" WHERE " + " AND ".join(where) if where else "")
     sql += f" ORDER BY {', '.join(_ORDER)} LIMIT ?"

@@ -29,6 +29,10 @@ _SUPERSEDE = (
     " AND n.encounter_id = bundles.encounter_id AND n.version > bundles.version ORDER BY n.version DESC LIMIT 1)"
     " WHERE site_id = ? AND encounter_id = ?"
 )
+_FLAG_SUPERSEDED = (
+    "UPDATE bundles SET superseded = CASE WHEN superseded_by IS NULL THEN 0 ELSE 1 END"
+    " WHERE site_id = ? AND encounter_id = ?"
+)
 _ADVISED_ALREADY = (
     "UPDATE bundles SET advised = 1 WHERE site_id = ? AND bundle_id = ? AND EXISTS (SELECT 1 FROM notes t"
     " WHERE t.site_id = bundles.site_id AND t.encounter_id = bundles.encounter_id AND t.written_at >= bundles.stored_at)"
@@ -155,4 +159,5 @@ def insert_bundle(
         [(site_id, manifest.bundle_id, p.name, p.media_type, p.sha256, p.size) for p in manifest.parts],
     )
     conn.execute(_SUPERSEDE, (site_id, manifest.encounter_id))
+    conn.execute(_FLAG_SUPERSEDED, (site_id, manifest.encounter_id))
     conn.execute(_ADVISED_ALREADY, (site_id, manifest.bundle_id))

@@ -117,22 +117,30 @@ def c003_must_change_password(db: Database) -> None:
 
 
 def c004_case_queue(db: Database) -> None:
-    """The consultants' list as indexed columns, so a page of it is read from an index at any number of cases:
-    which newer version replaced a bundle, and whether a note was written since it arrived (both kept current
-    by the writes that change them, center/storage/cases.py and notes.py)."""
+    """The consultants' list as indexed columns, so a page of it and its count are read from an index at any number
+    of cases: which newer version replaced a bundle (and a flag of it, first in the list's order), and whether a
+    note was written since it arrived; kept current by the writes that change them (center/storage/cases.py and
+    notes.py)."""
     db.execute("ALTER TABLE bundles ADD COLUMN superseded_by TEXT")
+    db.execute("ALTER TABLE bundles ADD COLUMN superseded INTEGER NOT NULL DEFAULT 0")
     db.execute("ALTER TABLE bundles ADD COLUMN advised INTEGER NOT NULL DEFAULT 0")
     db.execute("CREATE INDEX notes_encounter ON notes (site_id, encounter_id, written_at)")
     db.execute(
         "UPDATE bundles SET superseded_by = (SELECT n.bundle_id FROM bundles n WHERE n.site_id = bundles.site_id"
         " AND n.encounter_id = bundles.encounter_id AND n.version > bundles.version ORDER BY n.version DESC LIMIT 1)"
     )
+    db.execute("UPDATE bundles SET superseded = CASE WHEN superseded_by IS NULL THEN 0 ELSE 1 END")
     db.execute(
         "UPDATE bundles SET advised = 1 WHERE EXISTS (SELECT 1 FROM notes t WHERE t.site_id = bundles.site_id"
         " AND t.encounter_id = bundles.encounter_id AND t.written_at >= bundles.stored_at)"
     )
-    db.execute("CREATE INDEX bundles_queue ON bundles (advised, urgency_rank, stored_at, site_id, bundle_id)")
-    db.execute("CREATE INDEX bundles_site_queue ON bundles (site_id, advised, urgency_rank, stored_at, bundle_id)")
+    db.execute(
+        "CREATE INDEX bundles_queue ON bundles (superseded, advised, urgency_rank, stored_at, site_id, bundle_id)"
+    )
+    db.execute(
+        "CREATE INDEX bundles_site_queue ON bundles (site_id, superseded, advised, urgency_rank, stored_at, bundle_id)"
+    )
+    db.execute("CREATE INDEX bundles_received ON bundles (stored_at)")
 
 
 CENTER_STEPS = (c001_center, c002_audit_anchors, c003_must_change_password, c004_case_queue)
