@@ -172,6 +172,16 @@ def cmd_central(args, config: Config) -> int:
     return 0
 
 
+def cmd_central_router(args, config: Config) -> int:
+    from center.router import serve_router
+
+    central = config.central
+    if args.listen:
+        central = msgspec.structs.replace(central, listen_endpoints=args.listen)
+    serve_router(central)
+    return 0
+
+
 def add_commands(sub, load: Callable[[argparse.Namespace], Config]) -> None:
     def bind(parser, func) -> None:
         parser.set_defaults(func=lambda args: func(args, load(args)))
@@ -293,3 +303,13 @@ def add_commands(sub, load: Callable[[argparse.Namespace], Config]) -> None:
     central.add_argument("--site-id", default="burn-center", help="the center's id when its keys are first made")
     central.add_argument("--name", default="Burn center", help="the center's name when its keys are first made")
     bind(central, cmd_central)
+    router = central.add_subparsers(dest="central_command", metavar="router").add_parser(
+        "router",
+        help="run the center's Zenoh router on its own: clinics and several center workers connect to it",
+        **examples(
+            "burnedge central router --listen tcp/0.0.0.0:7447",
+            "burnedge central router --listen tcp/0.0.0.0:7447 --listen tcp/127.0.0.1:7448",
+        ),
+    )
+    router.add_argument("--listen", action="append", metavar="ENDPOINT", help="Zenoh endpoint, e.g. tcp/0.0.0.0:7447")
+    bind(router, cmd_central_router)

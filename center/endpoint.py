@@ -1,4 +1,5 @@
-"""The center's Zenoh endpoint: one queryable under `{prefix}/{center_id}/**`, answered from a thread pool.
+"""The center's Zenoh endpoint: the requests under `{prefix}/{center_id}/**` this worker answers (all of them for
+a center of one worker; its share of the clinics among several, center/workers.py), from a thread pool.
 
 Every refusal is logged with its reason, recorded in the `rejections` table and told to the sender; the
 endpoint goes on answering everything else.
@@ -17,11 +18,12 @@ from base.storage.postgres import AnyDatabase
 from center.anchors import AnchorBook
 from center.receiver import Receiver
 from center.storage import rejections
+from center.workers import WorkerShare
 from schemas.base import ID_PATTERN, iso, utcnow
 from schemas.config import CentralConfig
 from schemas.errors import BurnedgeError, TransferRejected
 from schemas.transfer import SITE_ID_PATTERN
-from sync.wire import refusal
+from sync.wire import LinkDown, refusal
 from sync.zenoh_link import Keys, center_session_config
 
 log = logging.getLogger("burnedge.central")
@@ -38,19 +40,30 @@ class Endpoint:
         self.anchors = AnchorBook(db, receiver.keys, receiver.verified)
         self.link = Keys(config.key_prefix, receiver.keys.site_id)
         self._session = None
-        self._queryable = None
+        self._share: WorkerShare | None = None
         self._pool: ThreadPoolExecutor | None = None
 
     def __enter__(self) -> Endpoint:
         self._pool = ThreadPoolExecutor(self.config.handler_threads, thread_name_prefix="central")
-        self._session = zenoh.open(center_session_config(self.config))
-        self._queryable = self._session.declare_queryable(self.link.all, self._on_query)
-        log.info("center %s listening on %s", self.link.center_id, ", ".join(self.config.listen_endpoints))
+        try:
+            self._session = zenoh.open(center_session_config(self.config))
+        except zenoh.ZError as exc:
+            self._pool.shutdown()
+            if self.config.router_endpoints:
+                where = f"reach the center's Zenoh router at {', '.join(self.config.router_endpoints)}"
+            else:
+                where = f"listen on {', '.join(self.config.listen_endpoints)}"
+            raise LinkDown(f"cannot {where}: {str(exc).split(' at /')[0]}") from exc
+        self._share = WorkerShare(self._session, self.link, self.db, self._on_query).__enter__()
+        if self.config.router_endpoints:
+            log.info("center %s worker connected to %s", self.link.center_id, ", ".join(self.config.router_endpoints))
+        else:
+            log.info("center %s listening on %s", self.link.center_id, ", ".join(self.config.listen_endpoints))
         return self
 
     def __exit__(self, *exc) -> None:
-        if self._queryable is not None:
-            self._queryable.undeclare()
+        if self._share is not None:
+            self._share.__exit__(*exc)
         if self._pool is not None:
             self._pool.shutdown(wait=True)
         if self._session is not None:

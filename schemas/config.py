@@ -468,6 +468,11 @@ class CentralConfig(Message):
     """Zenoh endpoints clinics connect to (use tls/... with certificates in `zenoh_config` on the internet)."""
     zenoh_config: str = ""
     """A Zenoh JSON5 config file (TLS certificates, transport tuning); the endpoints above override it."""
+    router_endpoints: list[str] = []
+    """Zenoh routers this worker connects to (`burnedge central router`, which listens on listen_endpoints, or a
+    standalone zenohd), e.g. "tcp/127.0.0.1:7447". Empty: this process is the router itself and the only worker.
+    Workers on the same database, store folder and keys that connect to the same routers share the clinics among
+    them and take over a stopped worker's clinics at once."""
     host: str = "127.0.0.1"
     """Address of the consultants' HTTP API."""
     port: Annotated[int, msgspec.Meta(ge=1, le=65535)] = 8090

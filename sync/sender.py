@@ -14,7 +14,6 @@ from collections import deque
 from dataclasses import dataclass, field
 
 import msgspec
-import zenoh
 
 from base.storage.database import Database
 from schemas.audit import AuditAnchor
@@ -34,7 +33,7 @@ from sync import anchor, mailbox, peers
 from sync.keys import SiteKeys, verify_envelope
 from sync.outbox import Outbox
 from sync.wire import LinkDown, error_text, request
-from sync.zenoh_link import Keys, clinic_session_config
+from sync.zenoh_link import Keys, open_clinic_session
 
 log = logging.getLogger("burnedge.sync")
 _PROGRESS_EVERY_S = 1.0
@@ -63,14 +62,7 @@ class Sender:
         report = RoundReport()
         center = peers.only_center(self.db.connection(), self.config.sync.center_id)
         link = Keys(self.config.sync.key_prefix, center.site_id)
-        try:
-            session_cm = zenoh.open(clinic_session_config(self.config.sync))
-        except zenoh.ZError as exc:
-            raise LinkDown(
-                f"cannot reach the burn center at {', '.join(self.config.sync.center_endpoints)}: "
-                f"{str(exc).split(' at /')[0]}"
-            ) from exc
-        with session_cm as session:
+        with open_clinic_session(self.config.sync) as session:
             for queued in self.outbox.pending():
                 bundle_id = queued.entry.bundle_id
                 try:

@@ -15,6 +15,7 @@ import zenoh
 
 from schemas.config import CentralConfig, SyncConfig
 from schemas.errors import InvalidInput
+from sync.wire import LinkDown
 
 
 def _base(path: str) -> zenoh.Config:
@@ -33,18 +34,31 @@ def _set(conf: zenoh.Config, key: str, value) -> None:
         raise InvalidInput(f"Zenoh setting {key} = {value!r} is not valid: {exc}") from exc
 
 
-def clinic_session_config(sync: SyncConfig) -> zenoh.Config:
-    if not sync.center_endpoints:
-        raise InvalidInput(
-            "[sync] center_endpoints is empty: set the burn center's Zenoh endpoint, e.g. tcp/203.0.113.5:7447"
-        )
+def clinic_session_config(sync: SyncConfig, endpoint: str) -> zenoh.Config:
+    """A clinic's session to one of the center's endpoints, retried for up to connect_timeout_s."""
     conf = _base(sync.zenoh_config)
     _set(conf, "mode", "client")
-    _set(conf, "connect/endpoints", list(sync.center_endpoints))
+    _set(conf, "connect/endpoints", [endpoint])
     _set(conf, "connect/timeout_ms", int(sync.connect_timeout_s * 1000))
     _set(conf, "connect/exit_on_failure", True)
     _no_discovery_no_shm(conf)
     return conf
+
+
+def open_clinic_session(sync: SyncConfig):
+    """A session to the first of the center's endpoints that answers, tried in the configured order (Zenoh itself,
+    given several with a timeout, keeps retrying the first until the timeout). LinkDown when none does."""
+    if not sync.center_endpoints:
+        raise InvalidInput(
+            "[sync] center_endpoints is empty: set the burn center's Zenoh endpoint, e.g. tcp/203.0.113.5:7447"
+        )
+    problems = []
+    for endpoint in sync.center_endpoints:
+        try:
+            return zenoh.open(clinic_session_config(sync, endpoint))
+        except zenoh.ZError as exc:
+            problems.append(f"{endpoint}: {str(exc).split(' at /')[0]}")
+    raise LinkDown(f"cannot reach the burn center ({'; '.join(problems)})")
 
 
 def _no_discovery_no_shm(conf: zenoh.Config) -> None:
@@ -55,6 +69,18 @@ def _no_discovery_no_shm(conf: zenoh.Config) -> None:
 
 
 def center_session_config(central: CentralConfig) -> zenoh.Config:
+    """A center worker's session: a client of the configured routers, or, with none, the router itself."""
+    if not central.router_endpoints:
+        return router_session_config(central)
+    conf = _base(central.zenoh_config)
+    _set(conf, "mode", "client")
+    _set(conf, "connect/endpoints", list(central.router_endpoints))
+    _no_discovery_no_shm(conf)
+    return conf
+
+
+def router_session_config(central: CentralConfig) -> zenoh.Config:
+    """The center's router (`burnedge central router`, or a worker that is its own): clinics and workers connect."""
     conf = _base(central.zenoh_config)
     _set(conf, "mode", "router")
     _set(conf, "listen/endpoints", list(central.listen_endpoints))
@@ -72,6 +98,18 @@ class Keys:
     @property
     def all(self) -> str:
         return f"{self.prefix}/{self.center_id}/**"
+
+    def site(self, site_id: str) -> str:
+        """Every request from one clinic (the verb comes first, the site second)."""
+        return f"{self.prefix}/{self.center_id}/*/{site_id}/**"
+
+    @property
+    def workers(self) -> str:
+        """The liveliness tokens of the center's workers."""
+        return f"{self.prefix}/workers/{self.center_id}/*"
+
+    def worker(self, worker_id: str) -> str:
+        return f"{self.prefix}/workers/{self.center_id}/{worker_id}"
 
     def announce(self, site_id: str) -> str:
         return f"{self.prefix}/{self.center_id}/announce/{site_id}"
