@@ -54,7 +54,7 @@ class Endpoint:
             else:
                 where = f"listen on {', '.join(self.config.listen_endpoints)}"
             raise LinkDown(f"cannot {where}: {str(exc).split(' at /')[0]}") from exc
-        self._share = WorkerShare(self._session, self.link, self.db, self._on_query).__enter__()
+        self._share = WorkerShare(self._session, self.link, self.db, self._on_query, self.config.worker_id).__enter__()
         if self.config.router_endpoints:
             log.info("center %s worker connected to %s", self.link.center_id, ", ".join(self.config.router_endpoints))
         else:

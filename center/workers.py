@@ -43,12 +43,12 @@ def owner(workers: set[str], site_id: str) -> str:
 
 
 class WorkerShare:
-    def __init__(self, session, link: Keys, db: AnyDatabase, answer: Callable):
+    def __init__(self, session, link: Keys, db: AnyDatabase, answer: Callable, worker_id: str = ""):
         self.session = session
         self.link = link
         self.db = db
         self.answer = answer
-        self.worker_id = f"{socket.gethostname()}-{os.getpid()}-{secrets.token_hex(3)}"
+        self.worker_id = worker_id or f"{socket.gethostname()}-{os.getpid()}-{secrets.token_hex(3)}"
         self.live: set[str] = {self.worker_id}
         self._owned: dict[str, tuple[object, float]] = {}
         """Clinics this worker declared a queryable for: the queryable and when."""

@@ -61,7 +61,9 @@ def record_case(
 class CenterProcess:
     """`burnedge central` on loopback, over a SQLite file in `folder` or the PostgreSQL database `database`."""
 
-    def __init__(self, folder: Path, zenoh_port: int, http_port: int, database: str | None = None):
+    def __init__(
+        self, folder: Path, zenoh_port: int, http_port: int, database: str | None = None, name: str = "center"
+    ):
         self.folder = folder
         self.env = {
             "BURNEDGE_CENTRAL_DATABASE": database or str(folder / "center.sqlite3"),
@@ -71,7 +73,7 @@ class CenterProcess:
             "BURNEDGE_CENTRAL_PORT": str(http_port),
         }
         self.url = f"http://127.0.0.1:{http_port}"
-        self.log = folder / "center.log"
+        self.log = folder / f"{name}.log"
         self.proc: subprocess.Popen | None = None
 
     def start(self, timeout: float = 30.0) -> CenterProcess:
@@ -85,6 +87,12 @@ class CenterProcess:
             )
         wait_healthy(self.proc, self.url, self.log, timeout, "center")
         return self
+
+    def client(self) -> GatewayClient:
+        """This center's API, signed in as the consultant `consult`."""
+        client = GatewayClient(self.url)
+        client.login("consult", PASSWORD)
+        return client
 
     def rows(self, sql: str, params: tuple = ()) -> list:
         """The center database's answer to a query, read as the IT person's tools would (either backend)."""
@@ -102,6 +110,36 @@ class CenterProcess:
                 self.proc.wait(15)
             except subprocess.TimeoutExpired:
                 self.kill()
+
+
+class RouterProcess:
+    """`burnedge central router` on loopback: clinics and center workers connect to `endpoint`."""
+
+    def __init__(self, folder: Path, port: int | None = None):
+        self.port = port or free_port()
+        self.endpoint = f"tcp/127.0.0.1:{self.port}"
+        self.log = folder / "router.log"
+        self.proc: subprocess.Popen | None = None
+
+    def start(self, timeout: float = 20.0) -> RouterProcess:
+        with open(self.log, "ab") as log:
+            self.proc = subprocess.Popen(
+                [sys.executable, "-m", "burnedge.cli", "central", "router", "--listen", self.endpoint],
+                cwd=REPO,
+                stdout=log,
+                stderr=subprocess.STDOUT,
+            )
+        deadline = time.monotonic() + timeout
+        while "center router listening" not in self.log.read_text():
+            if self.proc.poll() is not None or time.monotonic() > deadline:
+                raise AssertionError(f"the router did not start:\n{self.log.read_text()[-2000:]}")
+            time.sleep(0.1)
+        return self
+
+    def stop(self) -> None:
+        if self.proc and self.proc.poll() is None:
+            self.proc.terminate()
+            self.proc.wait(15)
 
 
 class Sites:
@@ -162,9 +200,7 @@ class Sites:
         return client
 
     def center_client(self) -> GatewayClient:
-        client = GatewayClient(self.center.url)
-        client.login("consult", PASSWORD)
-        return client
+        return self.center.client()
 
     def stop(self) -> None:
         self.gateway.stop()

@@ -473,6 +473,9 @@ class CentralConfig(Message):
     standalone zenohd), e.g. "tcp/127.0.0.1:7447". Empty: this process is the router itself and the only worker.
     Workers on the same database, store folder and keys that connect to the same routers share the clinics among
     them and take over a stopped worker's clinics at once."""
+    worker_id: Annotated[str, msgspec.Meta(pattern=r"^[A-Za-z0-9._-]{0,64}$")] = ""
+    """This worker's name among the center's workers, unique among them (e.g. "center-1"); empty: the host name,
+    process id and a random suffix."""
     host: str = "127.0.0.1"
     """Address of the consultants' HTTP API."""
     port: Annotated[int, msgspec.Meta(ge=1, le=65535)] = 8090

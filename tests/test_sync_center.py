@@ -101,7 +101,8 @@ def sent_chunks(client, encounter_id: str) -> int:
     return entries[0]["sent_chunks"] if entries and entries[0]["state"] == "queued" else 0
 
 
-def test_sigkill_of_either_side_mid_transfer_still_stores_each_bundle_once(tmp_path: Path, center_database: str):
+def test_sigkill_of_either_side_mid_transfer_still_stores_each_bundle_once(tmp_path: Path):
+    """On SQLite: with PostgreSQL, tests/test_center_router.py kills one of two workers the same way."""
     from harness.poor_link import ThrottlingProxy
 
     zenoh_port = free_port()
@@ -110,7 +111,6 @@ def test_sigkill_of_either_side_mid_transfer_still_stores_each_bundle_once(tmp_p
             tmp_path,
             center_endpoint=f"tcp/127.0.0.1:{proxy.port}",
             zenoh_port=zenoh_port,
-            center_database=center_database,
         )
         sites.gateway.env["BURNEDGE_SYNC_CHUNK_KIB"] = "64"
         sites.set_up()
