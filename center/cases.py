@@ -20,6 +20,8 @@ from sync.keys import SiteKeys
 from sync.mailbox import seal_note
 
 READERS = frozenset({Role.consultant, Role.clinician})
+COUNT_UP_TO = 10_000
+"""The case list counts the cases a filter matches up to this many ("10000+" beyond)."""
 
 
 class CaseService:
@@ -34,8 +36,10 @@ class CaseService:
         wanted = wanted or CaseFilter()
         with self.db.read() as conn:
             items, next_after = case_queue.page_of_cases(conn, wanted)
-            total = case_queue.count_cases(conn, wanted)
-        return CasePage(cases=items, total=total, next_after=next_after)
+            counted = case_queue.count_cases(conn, wanted, COUNT_UP_TO)
+        return CasePage(
+            cases=items, total=min(counted, COUNT_UP_TO), total_capped=counted > COUNT_UP_TO, next_after=next_after
+        )
 
     def case(self, who: Principal, site_id: str, bundle_id: str) -> CaseDetail:
         _require(who, READERS)

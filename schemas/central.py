@@ -71,9 +71,11 @@ class CasePage(Frozen):
 
     cases: list[CaseItem]
     total: int
-    """Cases matching the filter, on every page together."""
+    """Cases matching the filter, on every page together (counted up to a limit: see total_capped)."""
     next_after: str | None
     """Pass as `after` for the next page; None on the last page."""
+    total_capped: bool = False
+    """More cases match than were counted: `total` is the count's limit (10,000), not the number."""
 
 
 class NoteStatus(Frozen):

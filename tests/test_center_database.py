@@ -238,3 +238,15 @@ def test_a_cursor_the_list_did_not_hand_out_is_refused_in_words(seeded):
     for after in ("not-a-cursor", "AAAA", "kgE"):
         with pytest.raises(InvalidInput, match="next_after"):
             service.list_cases(CONSULTANT, CaseFilter(after=after))
+
+
+def test_a_count_past_its_limit_says_so_and_the_pages_still_hold_every_case(seeded, monkeypatch):
+    service, db, _ = seeded
+    latest = [(r[0], r[1]) for r in reference_order(db.connection()) if not r[4]]
+    monkeypatch.setattr("center.cases.COUNT_UP_TO", 100)
+    first = service.list_cases(CONSULTANT, CaseFilter(limit=30))
+    assert (first.total, first.total_capped) == (100, True) and len(latest) > 100
+    seen, _ = every_page(service, CaseFilter(limit=30))
+    assert [(c.site_id, c.bundle_id) for c in seen] == latest
+    few = service.list_cases(CONSULTANT, CaseFilter(state=CaseState.superseded, urgency=Urgency.immediate))
+    assert few.total < 100 and not few.total_capped

@@ -47,6 +47,7 @@ def _list_view(request, wanted: CaseFilter, shown: CasePage, clinics, problem: s
     return {
         "cases": shown.cases,
         "total": shown.total,
+        "total_capped": shown.total_capped,
         "wanted": wanted,
         "filtered": bool(chosen.keys() - {"include_superseded"}),
         "clinics": clinics,
