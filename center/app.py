@@ -8,11 +8,12 @@ from typing import Annotated
 
 import uvicorn
 from apscheduler.schedulers.background import BackgroundScheduler
-from litestar import Controller, Litestar, Response, get, post
+from litestar import Controller, Litestar, get, post
 from litestar.datastructures import State
 from litestar.di import Provide
 from litestar.openapi import OpenAPIConfig
 from litestar.params import Dependency, FromPath, JSONBody
+from litestar.response import Stream
 
 from base import __version__
 from base.accounts.permissions import Principal, require_admin
@@ -35,7 +36,6 @@ from base.web.query import query_struct
 from base.web.site import AuthedRequest
 from center.cases import CaseService
 from center.endpoint import Endpoint
-from center.files import PartStore
 from center.pages import NAV, SITE_NAME, TEMPLATES, page_controllers
 from center.receiver import Receiver
 from center.storage.migrations import CENTER_STEPS, CENTRAL_SET, central_migrations
@@ -88,7 +88,7 @@ class CentralServices:
             db=db,
             keys=keys,
             accounts=AccountService(db, config.security),
-            cases=CaseService(db, keys, PartStore(store_dir / "parts")),
+            cases=CaseService(db, keys, store_dir),
             receiver=Receiver(db, config.central, keys, store_dir),
         )
 
@@ -125,9 +125,9 @@ class CaseController(Controller):
     @get("/{site_id:str}/{bundle_id:str}/parts/{name:path}", sync_to_thread=True, summary="One file of a case")
     def part(
         self, site_id: SiteIdPath, bundle_id: IdPath, name: FromPath[str], request: AuthedRequest, services: CentralDep
-    ) -> Response[bytes]:
-        data, media_type = services.cases.part(request.user, site_id, bundle_id, name.lstrip("/"))
-        return Response(content=data, media_type=media_type)
+    ) -> Stream:
+        pieces, media_type, size = services.cases.part_stream(request.user, site_id, bundle_id, name.lstrip("/"))
+        return Stream(pieces, media_type=media_type, headers={"Content-Length": str(size)})
 
     @post(
         "/{site_id:str}/{bundle_id:str}/notes",

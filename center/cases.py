@@ -2,13 +2,17 @@
 
 from __future__ import annotations
 
+import itertools
 import sqlite3
 import uuid
+from collections.abc import Iterator
+from pathlib import Path
 
 from base.accounts.permissions import Principal
 from base.storage import accounts, audit
 from base.storage.postgres import AnyDatabase
 from center.files import PartStore
+from center.sealed_bundles import SealedBundles
 from center.storage import case_queue, cases, notes, rejections
 from schemas.accounts import Role
 from schemas.base import iso, utcnow
@@ -25,10 +29,12 @@ COUNT_UP_TO = 10_000
 
 
 class CaseService:
-    def __init__(self, db: AnyDatabase, keys: SiteKeys, parts: PartStore):
+    def __init__(self, db: AnyDatabase, keys: SiteKeys, store_dir: Path):
         self.db = db
         self.keys = keys
-        self.parts = parts
+        self.bundles = SealedBundles(store_dir / "bundles", keys.box)
+        self.plain_parts = PartStore(store_dir / "parts")
+        """Files of bundles stored before the center kept them sealed."""
 
     def list_cases(self, who: Principal, wanted: CaseFilter | None = None) -> CasePage:
         """A page of the cases the filter picks: awaiting advice first, then most urgent, then longest waiting."""
@@ -56,11 +62,21 @@ class CaseService:
         )
 
     def part(self, who: Principal, site_id: str, bundle_id: str, name: str) -> tuple[bytes, str]:
+        """One file of a case, whole (the record, the patient: small files the pages read)."""
+        pieces, media_type, _ = self.part_stream(who, site_id, bundle_id, name)
+        return b"".join(pieces), media_type
+
+    def part_stream(self, who: Principal, site_id: str, bundle_id: str, name: str) -> tuple[Iterator[bytes], str, int]:
+        """One file of a case as it is decrypted, its media type and size."""
         _require(who, READERS)
         part = cases.find_part(self.db.connection(), site_id, bundle_id, name)
         if part is None:
             raise NotFound(f"case {bundle_id} has no part {name!r}: its manifest lists the parts")
-        return self.parts.read(part.sha256), part.media_type
+        if part.sealed_key is None:
+            return iter([self.plain_parts.read(part.sha256)]), part.media_type, part.size
+        pieces = self.bundles.read(site_id, bundle_id, part)
+        first = next(pieces, b"")  # a missing or damaged start is an error answer, not a cut-off download
+        return itertools.chain([first], pieces), part.media_type, part.size
 
     def write_note(self, who: Principal, site_id: str, bundle_id: str, body: NoteRequest) -> NoteStatus:
         """Store a consultant's note and seal it for the clinic, which fetches it at its next round."""

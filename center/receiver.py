@@ -23,10 +23,10 @@ import msgspec
 
 from base.storage import audit
 from base.storage.postgres import AnyDatabase
-from center.files import PartStore
+from center.sealed_bundles import SealedBundles, chunk_name
 from center.storage import cases, notes, transfers
 from schemas.base import iso, utcnow
-from schemas.central import Announcement
+from schemas.central import Announcement, SealedAtRest
 from schemas.config import CentralConfig
 from schemas.errors import DuplicateRow, TransferRejected
 from schemas.transfer import (
@@ -57,7 +57,7 @@ class Receiver:
         self.config = config
         self.keys = keys
         self.staging = store_dir / "incoming"
-        self.parts = PartStore(store_dir / "parts")
+        self.bundles = SealedBundles(store_dir / "bundles", keys.box)
         self._manifests: dict[tuple[str, str], TransferManifest] = {}
         self._locks: dict[tuple[str, str], threading.Lock] = {}
         self._locks_guard = threading.Lock()
@@ -127,7 +127,7 @@ class Receiver:
         tmp = folder / f"{index:06d}.{os.getpid()}-{threading.get_ident()}.tmp"
         tmp.write_bytes(payload)
         # Not synced: a chunk lost in a crash is reported missing at commit and sent again.
-        os.replace(tmp, folder / f"{index:06d}.chunk")
+        os.replace(tmp, folder / chunk_name(index))
 
     # commit -------------------------------------------------------------------------
     def commit(self, site_id: str, bundle_id: str) -> CommitReply:
@@ -148,32 +148,45 @@ class Receiver:
         return cases.find_receipt(self.db.connection(), site_id, bundle_id)
 
     def _commit(self, site_id: str, bundle_id: str) -> CommitReply:
-        manifest = self._incoming(site_id, bundle_id)
+        transfer = self._incoming(site_id, bundle_id)
         folder = self.staging / site_id / bundle_id
-        # Read once: checked against the manifest here (an unsynced chunk may have been lost or damaged in a
-        # crash), then decrypted from the same bytes.
-        chunks = [_staged(folder / f"{i:06d}.chunk") for i in range(len(manifest.chunks))]
-        missing = [
-            i
-            for i, (data, ref) in enumerate(zip(chunks, manifest.chunks, strict=True))
-            if hashlib.sha256(data).hexdigest() != ref.sha256
-        ]
+        # Each chunk's sha256 was checked as it arrived; here only that it is still there and whole. Its
+        # authentication tag, checked as it is decrypted, catches one damaged on disk since (unsynced at a crash).
+        missing = [i for i, ref in enumerate(transfer.chunks) if not _size_ok(folder / chunk_name(i), ref.size)]
         if missing:
             stored = self._stored(site_id, bundle_id)  # another worker may have stored it and cleared the folder
             if stored is not None:
                 return CommitReply(status="stored", receipt=stored)
             return CommitReply(status="missing", missing=missing)
         try:
-            receipt = self._store(site_id, manifest, folder, chunks)
+            manifest, parts_offset = self._verify(site_id, transfer, folder)
+            receipt = self._store(site_id, transfer, manifest, parts_offset, folder)
+        except _DamagedChunk as damaged:
+            stored = self._stored(site_id, bundle_id)  # its staged chunks gone: another worker stored it
+            if stored is not None:
+                return CommitReply(status="stored", receipt=stored)
+            (folder / chunk_name(damaged.index)).unlink(missing_ok=True)
+            return CommitReply(status="missing", missing=[damaged.index])
         except TransferRejected:
             self._drop_incoming(site_id, bundle_id)  # the bundle itself is bad: nothing of it is kept
             raise
         return CommitReply(status="stored", receipt=receipt)
 
-    def _store(self, site_id: str, transfer: TransferManifest, folder: Path, chunks: list[bytes]) -> SignedEnvelope:
+    def _verify(self, site_id: str, transfer: TransferManifest, folder: Path) -> tuple[BundleManifest, int]:
+        """The bundle's manifest, every part checked, decrypting one chunk at a time; and where its parts start."""
         key = unseal_key(transfer.sealed_key, self.keys.box)
-        plain = b"".join(open_chunks(key, transfer.bundle_id, chunks, len(chunks)))
-        manifest, parts = bundle.unpack(plain)
+        check = bundle.ContainerCheck()
+        count = len(transfer.chunks)
+        for index in range(count):
+            data = _staged(folder / chunk_name(index))
+            try:
+                plain = next(open_chunks(key, transfer.bundle_id, [data], count, index))
+            except TransferRejected:
+                if hashlib.sha256(data).hexdigest() == transfer.chunks[index].sha256:
+                    raise  # the clinic sent it so: the bundle itself is bad
+                raise _DamagedChunk(index) from None
+            check.feed(plain)
+        manifest, parts_offset = check.finish()
         if (manifest.bundle_id, manifest.site_id, manifest.encounter_id, manifest.version) != (
             transfer.bundle_id,
             site_id,
@@ -181,8 +194,13 @@ class Receiver:
             transfer.version,
         ):
             raise TransferRejected("the bundle inside does not match its signed announcement", code="manifest-mismatch")
-        for part in manifest.parts:
-            self.parts.put(part.sha256, parts[part.name])
+        return manifest, parts_offset
+
+    def _store(
+        self, site_id: str, transfer: TransferManifest, manifest: BundleManifest, parts_offset: int, folder: Path
+    ) -> SignedEnvelope:
+        count = len(transfer.chunks)
+        self.bundles.keep(folder, site_id, transfer.bundle_id, count)
         announced = self._announcement(site_id, transfer.bundle_id)
         receipt = self.keys.sign(
             "receipt",
@@ -196,9 +214,12 @@ class Receiver:
                 duplicate=False,
             ),
         )
+        sealed = SealedAtRest(sealed_key=transfer.sealed_key, chunks=count, parts_offset=parts_offset)
         try:
-            self._insert(site_id, manifest, announced.manifest_sha256, receipt)
+            self._insert(site_id, manifest, announced.manifest_sha256, receipt, sealed)
         except DuplicateRow as exc:  # commit() tells a worker's race (the same bundle) from a replay
+            if self._stored(site_id, transfer.bundle_id) is None:
+                self.bundles.forget(site_id, transfer.bundle_id)
             raise TransferRejected(
                 f"version {manifest.version} of encounter {manifest.encounter_id} is already "
                 "stored from another bundle: a replay",
@@ -216,10 +237,18 @@ class Receiver:
         )
         return receipt
 
-    def _insert(self, site_id: str, manifest: BundleManifest, manifest_sha256: str, receipt: SignedEnvelope) -> None:
+    def _insert(
+        self, site_id: str, manifest: BundleManifest, manifest_sha256: str, receipt: SignedEnvelope, sealed
+    ) -> None:
         with self.db.write() as conn:
             cases.insert_bundle(
-                conn, site_id, manifest, manifest_sha256=manifest_sha256, stored_at=iso(utcnow()), receipt=receipt
+                conn,
+                site_id,
+                manifest,
+                manifest_sha256=manifest_sha256,
+                stored_at=iso(utcnow()),
+                receipt=receipt,
+                sealed=sealed,
             )
             transfers.delete_announcement(conn, site_id, manifest.bundle_id)
             audit.append(
@@ -324,7 +353,7 @@ class Receiver:
 
     def _held(self, site_id: str, manifest: TransferManifest) -> list[int]:
         folder = self.staging / site_id / manifest.bundle_id
-        return [i for i, ref in enumerate(manifest.chunks) if _size_ok(folder / f"{i:06d}.chunk", ref.size)]
+        return [i for i, ref in enumerate(manifest.chunks) if _size_ok(folder / chunk_name(i), ref.size)]
 
     def _drop_incoming(self, site_id: str, bundle_id: str) -> None:
         with self.db.write() as conn:
@@ -335,6 +364,14 @@ class Receiver:
     def _lock(self, site_id: str, bundle_id: str) -> threading.Lock:
         with self._locks_guard:
             return self._locks.setdefault((site_id, bundle_id), threading.Lock())
+
+
+class _DamagedChunk(Exception):
+    """A staged chunk that matched its sha256 on arrival no longer authenticates: damaged on disk, to send again."""
+
+    def __init__(self, index: int):
+        super().__init__(f"chunk {index} damaged")
+        self.index = index
 
 
 def _decode(decoder, payload: bytes, what: str):

@@ -129,6 +129,32 @@ class StoredBundle(Frozen):
     stored_at: str
 
 
+class SealedAtRest(Frozen):
+    """How a bundle kept as the clinic sealed it is read back."""
+
+    sealed_key: bytes
+    """The bundle's key, sealed to the center's X25519 key."""
+    chunks: int
+    parts_offset: int
+    """Where the bundle's first file starts in its plaintext (after the container's manifest)."""
+
+
+class StoredPart(Frozen):
+    """Where one file of a stored bundle is: inside the clinic's sealed chunks as received, or, for a bundle stored
+    before the center kept them sealed, as a plain file named by its sha256."""
+
+    name: str
+    media_type: str
+    sha256: str
+    size: int
+    sealed_key: bytes | None
+    """The bundle's key as the clinic sealed it to the center's X25519 key; None for a plain file."""
+    chunks: int
+    """How many chunks the bundle was sent in (part of each chunk's associated data)."""
+    plain_offset: int | None
+    """Where the file starts in the bundle's plaintext."""
+
+
 class Announcement(Frozen):
     """A transfer a clinic announced and has not committed yet."""
 

@@ -58,10 +58,11 @@ def unseal_key(sealed_key: bytes, own_box: PrivateKey) -> bytes:
     return key
 
 
-def open_chunks(key: bytes, context: str, chunks: Iterable[bytes], count: int) -> Iterator[bytes]:
-    """The plaintext of each chunk in order; raises TransferRejected on the first one that fails to authenticate."""
+def open_chunks(key: bytes, context: str, chunks: Iterable[bytes], count: int, first_index: int = 0) -> Iterator[bytes]:
+    """The plaintext of each chunk in order, the first being chunk `first_index` of `count`; raises
+    TransferRejected on the first one that fails to authenticate."""
     box = Aead(key)
-    for index, chunk in enumerate(chunks):
+    for index, chunk in enumerate(chunks, start=first_index):
         try:
             yield box.decrypt(chunk, _aad(context, index, count))
         except CryptoError as exc:

@@ -18,7 +18,6 @@ from base.accounts.permissions import Principal
 from base.folders import center_store_dir
 from center.app import CentralServices, open_center_db
 from center.cases import CaseService
-from center.files import PartStore
 from center.receiver import Receiver
 from harness.case_seed import enrol_clinics, seed_cases
 from harness.center_bundles import make_bundle
@@ -89,6 +88,7 @@ def test_migrations_apply_once_and_a_second_open_finds_nothing_to_do(center, cen
                 "c002_audit_anchors",
                 "c003_must_change_password",
                 "c004_case_queue",
+                "c005_sealed_at_rest",
             ]
     finally:
         again.close()
@@ -184,7 +184,7 @@ def seeded(center, tmp_path: Path):
     central, db, keys, _ = center
     site_ids = enrol_clinics(db, tmp_path / "seed-keys", 3)
     seed_cases(db, keys, site_ids, 320, batch=80)
-    return CaseService(db, keys, PartStore(tmp_path / "parts")), db, site_ids
+    return CaseService(db, keys, tmp_path / "store"), db, site_ids
 
 
 def test_the_case_list_pages_through_every_filter_in_order_with_nothing_missed_or_repeated(seeded):

@@ -16,7 +16,6 @@ from base.accounts.service import AccountService
 from base.storage import audit
 from center.app import open_center_db
 from center.cases import CaseService
-from center.files import PartStore
 from center.receiver import Receiver
 from center.storage import notes
 from harness.case_seed import enrol_clinics, seed_cases
@@ -39,8 +38,8 @@ def tool(name: str, *args: str) -> None:
         raise AssertionError(f"{name} failed ({result.returncode}): {result.stderr}")
 
 
-def snapshot(db, tmp_path: Path) -> dict:
-    service = CaseService(db, None, PartStore(tmp_path / "parts"))
+def snapshot(db, keys, tmp_path: Path) -> dict:
+    service = CaseService(db, keys, tmp_path / "store")
     rows = db.connection().execute("SELECT COUNT(*) FROM bundles").fetchone()[0]
     notes = db.connection().execute("SELECT COUNT(*) FROM notes").fetchone()[0]
     pages = {state: service.list_cases(CONSULTANT, CaseFilter(state=state, limit=200)) for state in CaseState}
@@ -59,7 +58,7 @@ def test_a_center_dumped_with_pg_dump_and_restored_with_pg_restore_serves_every_
         AccountService(db, FAST_SECURITY).create_user(
             None, UserCreate(username="consult", password="a long passphrase", role=Role.consultant)
         )
-        before = snapshot(db, tmp_path)
+        before = snapshot(db, keys, tmp_path)
     finally:
         db.close()
     assert before["bundles"] == 150 and before["audit"][0] and before["audit"][1] >= 1
@@ -72,7 +71,7 @@ def test_a_center_dumped_with_pg_dump_and_restored_with_pg_restore_serves_every_
     again = open_center_db(CentralConfig(database=restored, store_dir=central.store_dir, keys_dir=central.keys_dir))
     try:
         assert again.migrate("burnedge-central", []) == []
-        after = snapshot(again, tmp_path)
+        after = snapshot(again, keys, tmp_path)
     finally:
         again.close()
     assert after == before

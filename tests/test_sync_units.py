@@ -65,18 +65,30 @@ def test_the_container_checks_every_part_against_its_manifest():
         parts=[p.described for p in parts],
     )
     packed = bundle.pack(manifest, parts)
-    assert bundle.unpack(packed)[1] == {p.name: p.data for p in parts}
+    for piece in (1, 5, 64, len(packed)):  # as decrypted chunks of any size arrive
+        assert checked(packed, piece) == (manifest, packed.index(b"{}", 12 + 8))
     with pytest.raises(TransferRejected) as altered:
-        bundle.unpack(packed[:-3] + b"XXX")
+        checked(packed[:-3] + b"XXX")
     assert altered.value.code == "part-mismatch"
     with pytest.raises(TransferRejected) as extra:
-        bundle.unpack(packed + b"more")
+        checked(packed + b"more")
     assert extra.value.code == "bad-bundle"
+    with pytest.raises(TransferRejected, match="ends before"):
+        checked(packed[:-1])
+    with pytest.raises(TransferRejected, match="not a burnedge bundle"):
+        checked(b"PK\x03\x04" + packed[4:])
     evil = msgspec.structs.replace(
         manifest, parts=[msgspec.structs.replace(manifest.parts[0], name="../../etc/x"), manifest.parts[1]]
     )
     with pytest.raises(TransferRejected, match="safe relative path"):
-        bundle.unpack(bundle.pack(evil, [bundle.PartData("../../etc/x", b"{}"), parts[1]]))
+        checked(bundle.pack(evil, [bundle.PartData("../../etc/x", b"{}"), parts[1]]))
+
+
+def checked(container: bytes, piece: int = 7):
+    check = bundle.ContainerCheck()
+    for start in range(0, len(container), piece):
+        check.feed(container[start : start + piece])
+    return check.finish()
 
 
 def test_unfinished_transfers_are_dropped_after_the_stale_period(tmp_path: Path):

@@ -3,15 +3,15 @@ and the consultants' view of them as cases."""
 
 from __future__ import annotations
 
+import itertools
 import sqlite3
 
 import msgspec
 
-from schemas.central import CaseItem, StoredBundle, StoredCase
+from schemas.central import CaseItem, SealedAtRest, StoredBundle, StoredCase, StoredPart
 from schemas.transfer import (
     URGENCY_ORDER,
     BundleManifest,
-    BundlePart,
     CaseSummary,
     SignedEnvelope,
     SiteIdentity,
@@ -19,6 +19,8 @@ from schemas.transfer import (
 )
 
 _envelope = msgspec.msgpack.Decoder(SignedEnvelope)
+
+
 _CASE_COLUMNS = """b.site_id, b.bundle_id, b.encounter_id, b.patient_id, b.version, b.urgency, b.summary,
     b.stored_at, b.superseded_by, b.advised, p.identity AS peer_identity,
     (SELECT COUNT(*) FROM notes t WHERE t.site_id = b.site_id AND t.encounter_id = b.encounter_id) AS notes"""
@@ -113,14 +115,24 @@ def find_receipt(conn: sqlite3.Connection, site_id: str, bundle_id: str) -> Sign
     return None if row is None else _envelope.decode(row["receipt"])
 
 
-def find_part(conn: sqlite3.Connection, site_id: str, bundle_id: str, name: str) -> BundlePart | None:
-    """The stored bundle's part of this name, or None when it has none."""
+def find_part(conn: sqlite3.Connection, site_id: str, bundle_id: str, name: str) -> StoredPart | None:
+    """Where the stored bundle's file of this name is, or None when it has none."""
     row = conn.execute(
-        "SELECT * FROM bundle_parts WHERE site_id = ? AND bundle_id = ? AND name = ?", (site_id, bundle_id, name)
+        "SELECT p.*, b.sealed_key, b.chunks FROM bundle_parts p JOIN bundles b ON b.site_id = p.site_id"
+        " AND b.bundle_id = p.bundle_id WHERE p.site_id = ? AND p.bundle_id = ? AND p.name = ?",
+        (site_id, bundle_id, name),
     ).fetchone()
     if row is None:
         return None
-    return BundlePart(name=row["name"], media_type=row["media_type"], sha256=row["sha256"], size=row["size"])
+    return StoredPart(
+        name=row["name"],
+        media_type=row["media_type"],
+        sha256=row["sha256"],
+        size=row["size"],
+        sealed_key=bytes(row["sealed_key"]) if row["sealed_key"] is not None else None,
+        chunks=row["chunks"] or 0,
+        plain_offset=row["plain_offset"],
+    )
 
 
 def insert_bundle(
@@ -131,13 +143,15 @@ def insert_bundle(
     manifest_sha256: str,
     stored_at: str,
     receipt: SignedEnvelope,
+    sealed: SealedAtRest | None = None,
 ) -> None:
     """Store a bundle version and its parts' rows, and mark the versions it replaces. DuplicateRow when the site
-    already stored this version of the encounter from another bundle."""
+    already stored this version of the encounter from another bundle. `sealed`: where its files are in the chunks
+    kept as received (None: stored as plain files)."""
     conn.execute(
         "INSERT INTO bundles (site_id, bundle_id, encounter_id, patient_id, version, supersedes, urgency,"
-        " urgency_rank, summary, manifest, manifest_sha256, stored_at, receipt)"
-        " VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?)",
+        " urgency_rank, summary, manifest, manifest_sha256, stored_at, receipt, sealed_key, chunks)"
+        " VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?,?)",
         (
             site_id,
             manifest.bundle_id,
@@ -152,11 +166,18 @@ def insert_bundle(
             manifest_sha256,
             stored_at,
             msgspec.msgpack.encode(receipt),
+            sealed.sealed_key if sealed else None,
+            sealed.chunks if sealed else None,
         ),
     )
+    offsets = itertools.accumulate((p.size for p in manifest.parts), initial=sealed.parts_offset if sealed else 0)
     conn.executemany(
-        "INSERT INTO bundle_parts (site_id, bundle_id, name, media_type, sha256, size) VALUES (?,?,?,?,?,?)",
-        [(site_id, manifest.bundle_id, p.name, p.media_type, p.sha256, p.size) for p in manifest.parts],
+        "INSERT INTO bundle_parts (site_id, bundle_id, name, media_type, sha256, size, plain_offset)"
+        " VALUES (?,?,?,?,?,?,?)",
+        [
+            (site_id, manifest.bundle_id, p.name, p.media_type, p.sha256, p.size, offset if sealed else None)
+            for p, offset in zip(manifest.parts, offsets, strict=False)
+        ],
     )
     conn.execute(_SUPERSEDE, (site_id, manifest.encounter_id))
     conn.execute(_FLAG_SUPERSEDED, (site_id, manifest.encounter_id))

@@ -143,7 +143,21 @@ def c004_case_queue(db: Database) -> None:
     db.execute("CREATE INDEX bundles_received ON bundles (stored_at)")
 
 
-CENTER_STEPS = (c001_center, c002_audit_anchors, c003_must_change_password, c004_case_queue)
+def c005_sealed_at_rest(db: Database) -> None:
+    """Bundles kept as the clinic sealed them (center/sealed_bundles.py): the sealed key and chunk count of each,
+    and where each file starts in its plaintext. Bundles stored before keep their plain files (NULL here)."""
+    db.execute("ALTER TABLE bundles ADD COLUMN sealed_key BLOB")
+    db.execute("ALTER TABLE bundles ADD COLUMN chunks INTEGER")
+    db.execute("ALTER TABLE bundle_parts ADD COLUMN plain_offset INTEGER")
+
+
+CENTER_STEPS = (
+    c001_center,
+    c002_audit_anchors,
+    c003_must_change_password,
+    c004_case_queue,
+    c005_sealed_at_rest,
+)
 central_migrations = Migrations(CENTRAL_SET)
 for _step in CENTER_STEPS:
     central_migrations()(_step)
