@@ -85,11 +85,22 @@ class WorkerShare:
             if self._stop.is_set():
                 return
             wanted = {s for s in sites if self.owns(s)}
-            for site_id in self._owned.keys() - wanted:
+            dropped, added = self._owned.keys() - wanted, wanted - self._owned.keys()
+            for site_id in dropped:
                 self._owned.pop(site_id)[0].undeclare()
-            for site_id in wanted - self._owned.keys():
+            for site_id in added:
                 queryable = self.session.declare_queryable(self.link.site(site_id), self.answer, complete=True)
                 self._owned[site_id] = (queryable, time.monotonic())
+            count, workers = len(self._owned), len(self.live)
+        if dropped or added:
+            log.info(
+                "worker %s answers %d clinics of %d workers' (+%d -%d)",
+                self.worker_id,
+                count,
+                workers,
+                len(added),
+                len(dropped),
+            )
 
     def _on_worker(self, sample) -> None:
         worker_id = str(sample.key_expr).rsplit("/", 1)[-1]
