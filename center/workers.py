@@ -94,7 +94,7 @@ class WorkerShare:
             count, workers = len(self._owned), len(self.live)
         if dropped or added:
             log.info(
-                "worker %s answers %d clinics of %d workers' (+%d -%d)",
+                "worker %s answers %d clinics (%d workers alive; +%d -%d)",
                 self.worker_id,
                 count,
                 workers,

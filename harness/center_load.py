@@ -28,6 +28,7 @@ class LoadRun:
     """One line per case the clinics got a receipt for: clinic, bundle_id, bytes, seconds (queued to receipt)."""
     undelivered: int = 0
     wall_s: float = 0.0
+    """From the moment every clinic had queued its cases to the last receipt."""
     killed_at: int | None = None
     """How many cases had been delivered when a worker was killed."""
     restarted_at: int | None = None
@@ -44,6 +45,8 @@ class LoadRun:
             "mb_per_s": round(total / 1e6 / self.wall_s, 2) if self.wall_s else 0,
             "p50_s": round(statistics.median(seconds), 2) if seconds else None,
             "p99_s": round(seconds[max(0, int(0.99 * len(seconds)) - 1)], 2) if seconds else None,
+            "killed_after": self.killed_at,
+            "restarted_after": self.restarted_at,
         }
 
 
@@ -119,14 +122,20 @@ def run_load(
         + ["--min-mb", str(min_mb), "--max-mb", str(max_mb), "--threads", str(threads), "--timeout-s", str(timeout_s)]
         for first in range(0, clinics, per)
     ]
+    go = folder / "go"
+    go.unlink(missing_ok=True)
+    commands = [[*c, "--go-file", str(go)] for c in commands]
     lock = threading.Lock()
-    started = time.monotonic()
+    queued = threading.Semaphore(0)
     procs = [subprocess.Popen(c, cwd=REPO, stdout=subprocess.PIPE, text=True) for c in commands]
 
     def read(proc: subprocess.Popen) -> None:
         for line in proc.stdout:
             message = json.loads(line)
             with lock:
+                if "queued" in message:
+                    queued.release()
+                    continue
                 if "undelivered" in message:
                     run.undelivered += message["undelivered"]
                     continue
@@ -145,6 +154,10 @@ def run_load(
     readers = [threading.Thread(target=read, args=(p,)) for p in procs]
     for reader in readers:
         reader.start()
+    for _ in procs:
+        queued.acquire(timeout=timeout_s)
+    started = time.monotonic()
+    go.touch()
     for proc, reader in zip(procs, readers, strict=True):
         proc.wait(timeout_s + 120)
         reader.join()

@@ -130,6 +130,7 @@ def main() -> None:
     parser.add_argument("--threads", type=int, default=8, help="clinics syncing at the same time in this process")
     parser.add_argument("--timeout-s", type=float, default=600)
     parser.add_argument("--queue-only", action="store_true", help="set up and queue the cases, send nothing")
+    parser.add_argument("--go-file", type=Path, help="wait for this file to exist before sending")
     args = parser.parse_args()
     clinics = [SimClinic(args.folder, i, args.endpoint) for i in range(args.first, args.first + args.count)]
     sizes = random.Random(args.first)
@@ -138,6 +139,13 @@ def main() -> None:
             size = int(sizes.uniform(args.min_mb, args.max_mb) * 1_000_000)
             clinic.queue_case(size, seed=clinic.index * 100 + case)
     left = sum(len(c.queued) for c in clinics)
+    print(json.dumps({"queued": left}), flush=True)
+    if args.go_file is not None:
+        while not args.go_file.exists():  # every process sends at once, after all have queued
+            time.sleep(0.05)
+    started = time.monotonic()
+    for clinic in clinics:  # the clock of each case starts when sending starts: all of them wait from then on
+        clinic.queued = {b: (started, size, seed) for b, (_, size, seed) in clinic.queued.items()}
     if not args.queue_only:
         lock = threading.Lock()
 
