@@ -67,8 +67,17 @@ def peak_memory_mib(work: Path, case_mb: float) -> float:
     """The center worker's VmHWM after one clinic sent one case of `case_mb`."""
     center = LoadCenter(work, None, workers=1)
     try:
-        run = run_load(center, work / "clinics", clinics=1, cases=1, min_mb=case_mb, max_mb=case_mb,
-                       processes=1, threads=1, timeout_s=900)  # fmt: skip
+        run = run_load(
+            center,
+            work / "clinics",
+            clinics=1,
+            cases=1,
+            min_mb=case_mb,
+            max_mb=case_mb,
+            processes=1,
+            threads=1,
+            timeout_s=900,
+        )
         if run.undelivered:
             raise RuntimeError("the large case was not delivered")
         status = Path(f"/proc/{center.workers[0].proc.pid}/status").read_text()
@@ -111,10 +120,17 @@ def main() -> None:
                 total = args.clinics * args.cases
                 try:
                     run = run_load(
-                        center, work / "clinics", clinics=args.clinics, cases=args.cases, min_mb=args.min_mb,
-                        max_mb=args.max_mb, processes=args.processes, threads=args.threads,
-                        kill_after=total // 3 if kill else None, timeout_s=1800,
-                    )  # fmt: skip
+                        center,
+                        work / "clinics",
+                        clinics=args.clinics,
+                        cases=args.cases,
+                        min_mb=args.min_mb,
+                        max_mb=args.max_mb,
+                        processes=args.processes,
+                        threads=args.threads,
+                        kill_after=total // 3 if kill else None,
+                        timeout_s=1800,
+                    )
                 finally:
                     center.stop()
                 results[name] = {**run.figures(), "stored once": stored_once(center, total)}
@@ -122,9 +138,17 @@ def main() -> None:
         finally:
             server.stop()
         results["center peak MiB, 2 MB case"] = round(peak_memory_mib(Path(tmp) / "small", 2), 1)
-        results[f"center peak MiB, {args.large_mb:g} MB case"] = round(peak_memory_mib(Path(tmp) / "large", args.large_mb), 1)  # fmt: skip
-    figures = {"date": dt.date.today().isoformat(), "machine": f"{platform.machine()}, {os.cpu_count()} cores",
-               "clinics": args.clinics, "cases": args.cases, "mb": [args.min_mb, args.max_mb], "results": results}  # fmt: skip
+        results[f"center peak MiB, {args.large_mb:g} MB case"] = round(
+            peak_memory_mib(Path(tmp) / "large", args.large_mb), 1
+        )
+    figures = {
+        "date": dt.date.today().isoformat(),
+        "machine": f"{platform.machine()}, {os.cpu_count()} cores",
+        "clinics": args.clinics,
+        "cases": args.cases,
+        "mb": [args.min_mb, args.max_mb],
+        "results": results,
+    }
     print(json.dumps(figures, indent=2))
     if args.json:
         Path(args.json).write_text(json.dumps(figures, indent=2))

@@ -17,6 +17,7 @@ import logging
 import os
 import shutil
 import threading
+from collections.abc import Callable
 from pathlib import Path
 
 import msgspec
@@ -159,7 +160,7 @@ class Receiver:
                 return CommitReply(status="stored", receipt=stored)
             return CommitReply(status="missing", missing=missing)
         try:
-            manifest, parts_offset = self._verify(site_id, transfer, folder)
+            manifest, parts_offset = self._verify_and_keep(site_id, transfer, folder)
             receipt = self._store(site_id, transfer, manifest, parts_offset, folder)
         except _DamagedChunk as damaged:
             stored = self._stored(site_id, bundle_id)  # its staged chunks gone: another worker stored it
@@ -172,8 +173,21 @@ class Receiver:
             raise
         return CommitReply(status="stored", receipt=receipt)
 
-    def _verify(self, site_id: str, transfer: TransferManifest, folder: Path) -> tuple[BundleManifest, int]:
-        """The bundle's manifest, every part checked, decrypting one chunk at a time; and where its parts start."""
+    def _verify_and_keep(self, site_id: str, transfer: TransferManifest, folder: Path) -> tuple[BundleManifest, int]:
+        """Check the bundle, decrypting one chunk at a time, while its chunks are written to the file it is kept
+        in; that file on disk whole. The bundle's manifest, and where its parts start in its plaintext."""
+        writer = self.bundles.writer(site_id, transfer.bundle_id)
+        try:
+            manifest, parts_offset = self._verify(site_id, transfer, folder, writer.write)
+            writer.close_durably()
+        except BaseException:
+            writer.discard()
+            raise
+        return manifest, parts_offset
+
+    def _verify(
+        self, site_id: str, transfer: TransferManifest, folder: Path, keep: Callable[[bytes], None]
+    ) -> tuple[BundleManifest, int]:
         key = unseal_key(transfer.sealed_key, self.keys.box)
         check = bundle.ContainerCheck()
         count = len(transfer.chunks)
@@ -186,6 +200,7 @@ class Receiver:
                     raise  # the clinic sent it so: the bundle itself is bad
                 raise _DamagedChunk(index) from None
             check.feed(plain)
+            keep(data)
         manifest, parts_offset = check.finish()
         if (manifest.bundle_id, manifest.site_id, manifest.encounter_id, manifest.version) != (
             transfer.bundle_id,
@@ -200,7 +215,6 @@ class Receiver:
         self, site_id: str, transfer: TransferManifest, manifest: BundleManifest, parts_offset: int, folder: Path
     ) -> SignedEnvelope:
         count = len(transfer.chunks)
-        self.bundles.keep(folder, site_id, transfer.bundle_id, count)
         announced = self._announcement(site_id, transfer.bundle_id)
         receipt = self.keys.sign(
             "receipt",
@@ -214,7 +228,12 @@ class Receiver:
                 duplicate=False,
             ),
         )
-        sealed = SealedAtRest(sealed_key=transfer.sealed_key, chunks=count, parts_offset=parts_offset)
+        sealed = SealedAtRest(
+            sealed_key=transfer.sealed_key,
+            chunks=count,
+            chunk_bytes=transfer.chunks[0].size,
+            parts_offset=parts_offset,
+        )
         try:
             self._insert(site_id, manifest, announced.manifest_sha256, receipt, sealed)
         except DuplicateRow as exc:  # commit() tells a worker's race (the same bundle) from a replay

@@ -1,4 +1,5 @@
-"""Received bundles kept at rest as the clinic sealed them: its encrypted chunks, under `store_dir/bundles/`.
+"""Received bundles kept at rest as the clinic sealed them: its encrypted chunks one after the other, in one file per
+bundle under `store_dir/bundles/{site}/{bundle}/sealed.bin`.
 
 Nothing is decrypted to disk. A file of a case is read by opening the bundle's key with the center's private key
 (keys_dir, kept apart from the database and the store) and decrypting only the chunks that hold the file, one at a
@@ -11,6 +12,7 @@ from __future__ import annotations
 
 import os
 import shutil
+import uuid
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -21,9 +23,39 @@ from schemas.central import StoredPart
 from schemas.errors import NotFound, StorageError, TransferRejected
 from sync.sealing import OVERHEAD, open_chunks, unseal_key
 
+SEALED_FILE = "sealed.bin"
+
 
 def chunk_name(index: int) -> str:
+    """A chunk's file while its bundle is being received (store_dir/incoming/{site}/{bundle}/)."""
     return f"{index:06d}.chunk"
+
+
+class SealedWriter:
+    """The chunks of one bundle written out as they are verified, kept only by `close_durably()`: under a name of
+    this writer's own until then, so two workers committing the same bundle never share a half-written file."""
+
+    def __init__(self, final: Path):
+        self.final = final
+        final.parent.mkdir(parents=True, exist_ok=True)
+        self._tmp = final.with_name(f"{final.name}.{uuid.uuid4().hex}.tmp")
+        self._file = open(self._tmp, "xb")  # noqa: SIM115 (closed by close_durably or discard)
+
+    def write(self, ciphertext: bytes) -> None:
+        self._file.write(ciphertext)
+
+    def close_durably(self) -> None:
+        """On disk whole, before the row that names it is committed: one fsync for the whole bundle."""
+        self._file.flush()
+        os.fsync(self._file.fileno())
+        self._file.close()
+        os.replace(self._tmp, self.final)  # the same verified bytes whichever worker renames last
+        for folder in (self.final.parent, self.final.parent.parent, self.final.parent.parent.parent):
+            fsync_dir(folder)
+
+    def discard(self) -> None:
+        self._file.close()
+        self._tmp.unlink(missing_ok=True)
 
 
 class SealedBundles:
@@ -34,62 +66,36 @@ class SealedBundles:
     def folder(self, site_id: str, bundle_id: str) -> Path:
         return self.root / site_id / bundle_id
 
-    def keep(self, staged: Path, site_id: str, bundle_id: str, count: int) -> None:
-        """Make the staged chunks the bundle's at rest, durably, before the row that names them is committed.
-        Hard links, not a rename: another worker may be committing the same bundle from the same staged files."""
-        final = self.folder(site_id, bundle_id)
-        final.mkdir(parents=True, exist_ok=True)
-        for index in range(count):
-            target = final / chunk_name(index)
-            try:
-                os.link(staged / chunk_name(index), target)
-            except FileExistsError:
-                pass  # the same verified chunk, linked by another worker
-            with open(target, "rb") as f:
-                os.fsync(f.fileno())
-        fsync_dir(final)
-        fsync_dir(final.parent)
-        fsync_dir(self.root)
+    def writer(self, site_id: str, bundle_id: str) -> SealedWriter:
+        return SealedWriter(self.folder(site_id, bundle_id) / SEALED_FILE)
 
     def forget(self, site_id: str, bundle_id: str) -> None:
-        """Remove a bundle's chunks that no stored row names (its commit failed)."""
+        """Remove a bundle's file that no stored row names (its commit failed)."""
         shutil.rmtree(self.folder(site_id, bundle_id), ignore_errors=True)
 
     def read(self, site_id: str, bundle_id: str, part: StoredPart) -> Iterator[bytes]:
         """The file's bytes, decrypted a chunk at a time."""
-        folder = self.folder(site_id, bundle_id)
+        path = self.folder(site_id, bundle_id) / SEALED_FILE
         key = unseal_key(part.sealed_key, self.box)
-        plain_size = _plain_chunk_size(folder, part.chunks)
+        plain_size = part.chunk_bytes - OVERHEAD if part.chunks > 1 else 1 << 62
         first = part.plain_offset // plain_size
         last = (part.plain_offset + part.size - 1) // plain_size if part.size else first - 1
-        start = part.plain_offset - first * plain_size
-        left = part.size
+        start, left = part.plain_offset - first * plain_size, part.size
         try:
-            for plain in _open_range(key, bundle_id, folder, first, last, part.chunks):
-                piece = plain[start : start + left]
-                start = 0
-                left -= len(piece)
-                yield piece
+            with open(path, "rb") as sealed:
+                for plain in open_chunks(key, bundle_id, _chunks(sealed, part, first, last), part.chunks, first):
+                    piece = plain[start : start + left]
+                    start, left = 0, left - len(piece)
+                    yield piece
+        except FileNotFoundError as exc:
+            raise NotFound(f"bundle {bundle_id} is missing from the center's store") from exc
         except TransferRejected as exc:
             raise StorageError(f"the stored file {part.name} of bundle {bundle_id} is damaged: {exc.detail}") from exc
         if left:
             raise StorageError(f"the stored file {part.name} of bundle {bundle_id} ends early")
 
 
-def _plain_chunk_size(folder: Path, count: int) -> int:
-    """Every chunk but the last holds the same plaintext size: the first one's, less its nonce and tag."""
-    try:
-        return (folder / chunk_name(0)).stat().st_size - OVERHEAD if count > 1 else 1 << 62
-    except FileNotFoundError as exc:
-        raise NotFound(f"the stored chunks of bundle {folder.name} are missing from the center's store") from exc
-
-
-def _open_range(key: bytes, bundle_id: str, folder: Path, first: int, last: int, count: int) -> Iterator[bytes]:
-    return open_chunks(key, bundle_id, (_chunk(folder, bundle_id, i) for i in range(first, last + 1)), count, first)
-
-
-def _chunk(folder: Path, bundle_id: str, index: int) -> bytes:
-    try:
-        return (folder / chunk_name(index)).read_bytes()
-    except FileNotFoundError as exc:
-        raise NotFound(f"chunk {index} of bundle {bundle_id} is missing from the center's store") from exc
+def _chunks(sealed, part: StoredPart, first: int, last: int) -> Iterator[bytes]:
+    sealed.seek(first * part.chunk_bytes)
+    for _ in range(first, last + 1):
+        yield sealed.read(part.chunk_bytes)  # the last chunk reads short, to the end of the file

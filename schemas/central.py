@@ -135,6 +135,8 @@ class SealedAtRest(Frozen):
     sealed_key: bytes
     """The bundle's key, sealed to the center's X25519 key."""
     chunks: int
+    chunk_bytes: int
+    """Size of every encrypted chunk but the last, which may be smaller."""
     parts_offset: int
     """Where the bundle's first file starts in its plaintext (after the container's manifest)."""
 
@@ -151,6 +153,8 @@ class StoredPart(Frozen):
     """The bundle's key as the clinic sealed it to the center's X25519 key; None for a plain file."""
     chunks: int
     """How many chunks the bundle was sent in (part of each chunk's associated data)."""
+    chunk_bytes: int
+    """Size of every encrypted chunk but the last."""
     plain_offset: int | None
     """Where the file starts in the bundle's plaintext."""
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import hashlib
 import logging
+import os
 import shutil
 import threading
 import uuid
@@ -18,11 +19,19 @@ import msgspec
 from base.folders import outbox_root
 from base.storage import audit
 from base.storage.database import Database
-from base.storage.durable import fsync_dir, write_file
+from base.storage.durable import fsync_dir
 from schemas.base import iso, utcnow
 from schemas.config import Config
 from schemas.errors import Conflict, DuplicateRow
-from schemas.transfer import PROTOCOL, OutboxBundle, OutboxEntry, OutboxState, SignedEnvelope, TransferManifest
+from schemas.transfer import (
+    PROTOCOL,
+    ChunkRef,
+    OutboxBundle,
+    OutboxEntry,
+    OutboxState,
+    SignedEnvelope,
+    TransferManifest,
+)
 from sync import bundle, case_snapshot, peers
 from sync.keys import SiteKeys
 from sync.sealing import seal
@@ -30,6 +39,8 @@ from sync.storage import outbox as store
 
 log = logging.getLogger("burnedge.sync")
 _envelope = msgspec.msgpack.Decoder(SignedEnvelope)
+SEALED_FILE = "sealed.bin"
+"""A queued bundle's encrypted chunks, one after the other."""
 _queue_lock = threading.Lock()
 
 
@@ -138,8 +149,16 @@ class Outbox:
     def envelope(self, queued: OutboxBundle) -> SignedEnvelope:
         return _envelope.decode(queued.envelope)
 
-    def chunk(self, bundle_id: str, index: int) -> bytes:
-        return (self.root / bundle_id / f"{index:06d}.chunk").read_bytes()
+    def chunk(self, bundle_id: str, index: int, refs: list[ChunkRef]) -> bytes:
+        """Chunk `index` of the bundle's sealed file (one file per bundle; a bundle queued by an older gateway has
+        a file per chunk)."""
+        folder = self.root / bundle_id
+        try:
+            with open(folder / SEALED_FILE, "rb") as sealed:
+                sealed.seek(sum(r.size for r in refs[:index]))
+                return sealed.read(refs[index].size)
+        except FileNotFoundError:
+            return (folder / f"{index:06d}.chunk").read_bytes()
 
     def progress(self, bundle_id: str, sent_chunks: int) -> None:
         with self.db.write() as conn:
@@ -167,10 +186,14 @@ class Outbox:
         shutil.rmtree(self.root / bundle_id, ignore_errors=True)  # the center holds it now
 
     def _write_chunks(self, bundle_id: str, chunks: list[bytes]) -> None:
+        # One file, one fsync, for the whole bundle: a file per chunk cost an fsync each (1,600 for 200 MB).
         folder = self.root / bundle_id
         folder.mkdir(parents=True, exist_ok=False)
-        for index, data in enumerate(chunks):
-            write_file(folder / f"{index:06d}.chunk", data)
+        with open(folder / SEALED_FILE, "xb") as sealed:
+            for data in chunks:
+                sealed.write(data)
+            sealed.flush()
+            os.fsync(sealed.fileno())
         for path in (folder, self.root):
             fsync_dir(path)
 

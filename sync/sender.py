@@ -135,7 +135,7 @@ class Sender:
             if len(window) >= self.config.sync.window_chunks:
                 settle()
             key = link.chunk(self.keys.site_id, bundle_id, index, refs[index].sha256)
-            window.append((index, session.get(key, payload=self.outbox.chunk(bundle_id, index), timeout=timeout)))
+            window.append((index, session.get(key, payload=self.outbox.chunk(bundle_id, index, refs), timeout=timeout)))
         while window:
             settle()
         self.outbox.progress(bundle_id, acked)

@@ -143,11 +143,11 @@ def test_a_backup_taken_under_a_write_burst_restores_every_acknowledged_write(se
     for sha, size in assets:
         blob = into / "burnedge-media" / "blobs" / sha[:2] / sha
         assert blob.stat().st_size == size and hashlib.sha256(blob.read_bytes()).hexdigest() == sha
-    bundle, chunks = queued[0]
+    bundle, _ = queued[0]
     original = sites.folder / "burnedge-outbox" / bundle
-    for i in range(chunks):
-        name = f"{i:06d}.chunk"
-        assert (into / "burnedge-outbox" / bundle / name).read_bytes() == (original / name).read_bytes()
+    names = sorted(p.name for p in original.iterdir())
+    assert names == ["sealed.bin"] and sorted(p.name for p in (into / "burnedge-outbox" / bundle).iterdir()) == names
+    assert (into / "burnedge-outbox" / bundle / "sealed.bin").read_bytes() == (original / "sealed.bin").read_bytes()
     assert (into / "burnedge-keys" / "site.key").read_bytes() == (
         sites.folder / "burnedge-keys" / "site.key"
     ).read_bytes()

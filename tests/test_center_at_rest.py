@@ -62,8 +62,9 @@ def test_a_stored_case_is_sealed_at_rest_and_read_back_for_a_consultant(center, 
 
     store = Path(central.store_dir)
     files = every_file(store)
-    assert len(files) == len(sealed.chunks) and all(f.parent.name == bundle_id for f in files)
-    assert not any(PHOTO[:256] in f.read_bytes() for f in files)
+    kept = store / "bundles" / clinic.site_id / bundle_id / "sealed.bin"
+    assert files == [kept] and kept.read_bytes() == b"".join(sealed.chunks)  # as the clinic sealed it
+    assert PHOTO[:256] not in kept.read_bytes()
     if not central.database.startswith("postgresql://"):
         assert PHOTO[:256] not in Path(central.database).read_bytes()
     service = CaseService(db, keys, store)
@@ -71,10 +72,9 @@ def test_a_stored_case_is_sealed_at_rest_and_read_back_for_a_consultant(center, 
     record, media_type = service.part(CONSULTANT, clinic.site_id, bundle_id, "record.json")
     assert msgspec.json.decode(record)["encounter"] and media_type == "application/json"
 
-    damaged = store / "bundles" / clinic.site_id / bundle_id / "000010.chunk"  # inside the photo
-    data = bytearray(damaged.read_bytes())
-    data[40] ^= 1
-    damaged.write_bytes(bytes(data))
+    data = bytearray(kept.read_bytes())
+    data[10 * len(sealed.chunks[0]) + 40] ^= 1  # chunk 10: inside the photo
+    kept.write_bytes(bytes(data))
     with pytest.raises(StorageError, match="damaged"):
         service.part(CONSULTANT, clinic.site_id, bundle_id, "photos/a.jpg")
     assert service.part(CONSULTANT, clinic.site_id, bundle_id, "record.json")[0] == record  # in chunk 0

@@ -118,7 +118,7 @@ def find_receipt(conn: sqlite3.Connection, site_id: str, bundle_id: str) -> Sign
 def find_part(conn: sqlite3.Connection, site_id: str, bundle_id: str, name: str) -> StoredPart | None:
     """Where the stored bundle's file of this name is, or None when it has none."""
     row = conn.execute(
-        "SELECT p.*, b.sealed_key, b.chunks FROM bundle_parts p JOIN bundles b ON b.site_id = p.site_id"
+        "SELECT p.*, b.sealed_key, b.chunks, b.chunk_bytes FROM bundle_parts p JOIN bundles b ON b.site_id = p.site_id"
         " AND b.bundle_id = p.bundle_id WHERE p.site_id = ? AND p.bundle_id = ? AND p.name = ?",
         (site_id, bundle_id, name),
     ).fetchone()
@@ -131,6 +131,7 @@ def find_part(conn: sqlite3.Connection, site_id: str, bundle_id: str, name: str)
         size=row["size"],
         sealed_key=bytes(row["sealed_key"]) if row["sealed_key"] is not None else None,
         chunks=row["chunks"] or 0,
+        chunk_bytes=row["chunk_bytes"] or 0,
         plain_offset=row["plain_offset"],
     )
 
@@ -150,8 +151,8 @@ def insert_bundle(
     kept as received (None: stored as plain files)."""
     conn.execute(
         "INSERT INTO bundles (site_id, bundle_id, encounter_id, patient_id, version, supersedes, urgency,"
-        " urgency_rank, summary, manifest, manifest_sha256, stored_at, receipt, sealed_key, chunks)"
-        " VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?,?)",
+        " urgency_rank, summary, manifest, manifest_sha256, stored_at, receipt, sealed_key, chunks, chunk_bytes)"
+        " VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?)",
         (
             site_id,
             manifest.bundle_id,
@@ -168,6 +169,7 @@ def insert_bundle(
             msgspec.msgpack.encode(receipt),
             sealed.sealed_key if sealed else None,
             sealed.chunks if sealed else None,
+            sealed.chunk_bytes if sealed else None,
         ),
     )
     offsets = itertools.accumulate((p.size for p in manifest.parts), initial=sealed.parts_offset if sealed else 0)

@@ -144,10 +144,12 @@ def c004_case_queue(db: Database) -> None:
 
 
 def c005_sealed_at_rest(db: Database) -> None:
-    """Bundles kept as the clinic sealed them (center/sealed_bundles.py): the sealed key and chunk count of each,
-    and where each file starts in its plaintext. Bundles stored before keep their plain files (NULL here)."""
+    """Bundles kept as the clinic sealed them (center/sealed_bundles.py): the sealed key, chunk count and chunk
+    size of each, and where each file starts in its plaintext. Bundles stored before keep their plain files (NULL
+    here)."""
     db.execute("ALTER TABLE bundles ADD COLUMN sealed_key BLOB")
     db.execute("ALTER TABLE bundles ADD COLUMN chunks INTEGER")
+    db.execute("ALTER TABLE bundles ADD COLUMN chunk_bytes INTEGER")
     db.execute("ALTER TABLE bundle_parts ADD COLUMN plain_offset INTEGER")
 
 

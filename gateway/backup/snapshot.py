@@ -28,6 +28,7 @@ from gateway.storage import backup_copy
 from schemas.audit import AuditHead
 from schemas.config import Config
 from sync.keys import PUBLIC_FILE
+from sync.outbox import SEALED_FILE
 
 STAGING_PREFIX = ".burnedge-backup-"
 
@@ -104,6 +105,13 @@ def _remove_stale_staging(parent: Path) -> None:
             continue
 
 
+def _outbox_files(folder: Path, chunks: int) -> list[str]:
+    """A queued bundle's sealed file, or its file per chunk when an older gateway queued it."""
+    if (folder / SEALED_FILE).exists():
+        return [SEALED_FILE]
+    return [f"{i:06d}.chunk" for i in range(chunks)]
+
+
 def _refer(contents: backup_copy.CopyContents, copy: Path, layout: StateLayout, keys: dict[str, bytes]) -> Snapshot:
     blobs = [
         (f"media/blobs/{sha[:2]}/{sha}", layout.media / "blobs" / sha[:2] / sha, sha) for sha in contents.blob_sha256s
@@ -117,9 +125,9 @@ def _refer(contents: backup_copy.CopyContents, copy: Path, layout: StateLayout, 
         if track.is_file():  # the per-visit registrations beside it are a cache, rebuilt on the next analysis
             files.append((f"analyses/patients/{patient}/track.json", track))
     outbox = [
-        (f"outbox/{b.bundle_id}/{i:06d}.chunk", layout.outbox / b.bundle_id / f"{i:06d}.chunk")
+        (f"outbox/{b.bundle_id}/{name}", layout.outbox / b.bundle_id / name)
         for b in contents.queued_bundles
-        for i in range(b.chunks)
+        for name in _outbox_files(layout.outbox / b.bundle_id, b.chunks)
     ]
     site_id = None
     if PUBLIC_FILE in keys:
