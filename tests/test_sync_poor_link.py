@@ -13,9 +13,18 @@ import sqlite3
 import time
 from pathlib import Path
 
+import msgspec
 import pytest
 
+from base.accounts.permissions import Principal
+from center.app import open_center_db
+from center.cases import CaseService
 from harness.poor_link_sites import RATE_KBIT, outbox_entry, poor_link, record_and_queue
+from schemas.accounts import Role
+from schemas.config import CentralConfig
+from sync.keys import load_keys
+
+CONSULTANT = Principal("u-consultant", "consult", Role.consultant, None, "session")
 
 pytestmark = pytest.mark.server
 
@@ -73,10 +82,21 @@ def test_five_megabytes_over_256_kbit_with_three_cuts_arrive_once_and_intact(tmp
         assert db.execute("SELECT COUNT(*) FROM incoming").fetchone()[0] == 0
     manifest = json.loads(rows[0][0])
     assert manifest["encounter_id"] == encounter_id
-    parts = tmp_path / "burnedge-central-store" / "parts"
-    received = sorted(
-        (parts / p["sha256"][:2] / p["sha256"]).read_bytes()
-        for p in manifest["parts"]
-        if p["name"].startswith("photos/")
+    env = sites.center.env
+    central = CentralConfig(
+        database=env["BURNEDGE_CENTRAL_DATABASE"],
+        store_dir=env["BURNEDGE_CENTRAL_STORE_DIR"],
+        keys_dir=env["BURNEDGE_CENTRAL_KEYS_DIR"],
     )
+    center_db = open_center_db(central)
+    try:  # the center keeps the sealed chunks: read the photos back as a consultant's download decrypts them
+        service = CaseService(center_db, load_keys(Path(central.keys_dir)), Path(central.store_dir))
+        site_id = msgspec.json.decode(rows[0][0])["site_id"]
+        received = sorted(
+            service.part(CONSULTANT, site_id, bundle_id, p["name"])[0]
+            for p in manifest["parts"]
+            if p["name"].startswith("photos/")
+        )
+    finally:
+        center_db.close()
     assert received == sorted(p.read_bytes() for p in photos), "photos differ after the transfer"
