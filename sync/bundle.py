@@ -53,10 +53,17 @@ class PartData:
 
 def pack(manifest: BundleManifest, parts: list[PartData]) -> bytes:
     """The container's bytes; the manifest's part list must describe `parts` in order."""
+    _, pieces = packed(manifest, parts)
+    return b"".join(pieces)
+
+
+def packed(manifest: BundleManifest, parts: list[PartData]) -> tuple[int, list[bytes]]:
+    """The container's size and its pieces in order (the head, then each part's bytes), not joined."""
     if [p.name for p in manifest.parts] != [p.name for p in parts]:
         raise ValueError("the manifest must list the parts in the order they are packed")
     head = msgspec.json.encode(manifest)
-    return b"".join([MAGIC, _LENGTH.pack(len(head)), head, *(p.data for p in parts)])
+    pieces = [MAGIC + _LENGTH.pack(len(head)) + head, *(p.data for p in parts)]
+    return sum(len(piece) for piece in pieces), pieces
 
 
 def check_part_name(name: str) -> None:

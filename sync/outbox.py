@@ -13,6 +13,7 @@ import os
 import shutil
 import threading
 import uuid
+from collections.abc import Iterable
 
 import msgspec
 
@@ -34,7 +35,7 @@ from schemas.transfer import (
 )
 from sync import bundle, case_snapshot, peers
 from sync.keys import SiteKeys
-from sync.sealing import seal
+from sync.sealing import seal_stream
 from sync.storage import outbox as store
 
 log = logging.getLogger("burnedge.sync")
@@ -76,12 +77,11 @@ class Outbox:
                 supersedes=last.entry.bundle_id if last else None,
                 created_by=user,
             )
-            sealed = seal(
-                bundle.pack(manifest, snap.parts),
-                bytes.fromhex(center.box_key),
-                bundle_id,
-                self.config.sync.chunk_kib * 1024,
+            total, pieces = bundle.packed(manifest, snap.parts)
+            sealed_key, chunks = seal_stream(
+                pieces, total, bytes.fromhex(center.box_key), bundle_id, self.config.sync.chunk_kib * 1024
             )
+            refs = self._write_chunks(bundle_id, chunks)  # sealed a chunk at a time, straight into the file
             announcement = TransferManifest(
                 protocol=PROTOCOL,
                 bundle_id=bundle_id,
@@ -90,12 +90,11 @@ class Outbox:
                 encounter_id=encounter_id,
                 version=version,
                 created_at=manifest.created_at,
-                sealed_key=sealed.sealed_key,
+                sealed_key=sealed_key,
                 plain_size=sum(p.size for p in manifest.parts),
-                chunks=sealed.refs,
+                chunks=refs,
             )
             envelope = keys.sign("manifest", announcement)
-            self._write_chunks(bundle_id, sealed.chunks)
             try:
                 with self.db.write() as conn:
                     store.insert_queued(
@@ -106,8 +105,8 @@ class Outbox:
                         center_id=center.site_id,
                         content_digest=digest,
                         envelope=msgspec.msgpack.encode(envelope),
-                        chunks=len(sealed.chunks),
-                        size=sum(len(c) for c in sealed.chunks),
+                        chunks=len(refs),
+                        size=sum(r.size for r in refs),
                         created_at=manifest.created_at,
                         created_by=user,
                     )
@@ -132,7 +131,7 @@ class Outbox:
             bundle_id,
             encounter_id,
             version,
-            len(sealed.chunks),
+            len(refs),
         )
         return self.get(bundle_id)
 
@@ -185,17 +184,25 @@ class Outbox:
             )
         shutil.rmtree(self.root / bundle_id, ignore_errors=True)  # the center holds it now
 
-    def _write_chunks(self, bundle_id: str, chunks: list[bytes]) -> None:
-        # One file, one fsync, for the whole bundle: a file per chunk cost an fsync each (1,600 for 200 MB).
+    def _write_chunks(self, bundle_id: str, chunks: Iterable[bytes]) -> list[ChunkRef]:
+        """The sealed chunks into the bundle's one file, with one fsync (a file per chunk cost an fsync each:
+        1,600 for 200 MB); each chunk's name (its sha256) and size, for the announcement."""
         folder = self.root / bundle_id
         folder.mkdir(parents=True, exist_ok=False)
-        with open(folder / SEALED_FILE, "xb") as sealed:
-            for data in chunks:
-                sealed.write(data)
-            sealed.flush()
-            os.fsync(sealed.fileno())
-        for path in (folder, self.root):
-            fsync_dir(path)
+        refs = []
+        try:
+            with open(folder / SEALED_FILE, "xb") as sealed:
+                for data in chunks:
+                    sealed.write(data)
+                    refs.append(ChunkRef(sha256=hashlib.sha256(data).hexdigest(), size=len(data)))
+                sealed.flush()
+                os.fsync(sealed.fileno())
+            for path in (folder, self.root):
+                fsync_dir(path)
+        except BaseException:
+            shutil.rmtree(folder, ignore_errors=True)
+            raise
+        return refs
 
 
 def _content_digest(parts: list[bundle.PartData]) -> str:

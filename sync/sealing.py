@@ -37,15 +37,46 @@ class Sealed:
 
 def seal(plaintext: bytes, recipient_box_key: bytes, context: str, chunk_size: int) -> Sealed:
     """Encrypt `plaintext` in chunks of `chunk_size` under a fresh key sealed to the recipient."""
+    sealed_key, chunks = seal_stream([plaintext], len(plaintext), recipient_box_key, context, chunk_size)
+    return Sealed(sealed_key=sealed_key, chunks=list(chunks))
+
+
+def seal_stream(
+    pieces: Iterable[bytes], total: int, recipient_box_key: bytes, context: str, chunk_size: int
+) -> tuple[bytes, Iterator[bytes]]:
+    """Encrypt the `total` bytes that `pieces` yield in chunks of `chunk_size` under a fresh key sealed to the
+    recipient: the sealed key, and the chunks made one at a time (the plaintext is never joined in memory)."""
     key = random(KEY_BYTES)
     box = Aead(key)
-    count = max(1, -(-len(plaintext) // chunk_size))
-    view = memoryview(plaintext)
-    chunks = [
-        bytes(box.encrypt(bytes(view[i * chunk_size : (i + 1) * chunk_size]), _aad(context, i, count)))
-        for i in range(count)
-    ]
-    return Sealed(sealed_key=SealedBox(PublicKey(recipient_box_key)).encrypt(key), chunks=chunks)
+    count = max(1, -(-total // chunk_size))
+
+    def chunks() -> Iterator[bytes]:
+        index, partial = 0, bytearray()
+
+        def encrypt(plain) -> bytes:
+            nonlocal index
+            index += 1
+            return bytes(box.encrypt(bytes(plain), _aad(context, index - 1, count)))
+
+        for piece in pieces:
+            view = memoryview(piece)
+            if partial:
+                take = min(chunk_size - len(partial), len(view))
+                partial += view[:take]
+                view = view[take:]
+                if len(partial) == chunk_size:
+                    yield encrypt(partial)
+                    partial.clear()
+            while len(view) >= chunk_size:
+                yield encrypt(view[:chunk_size])
+                view = view[chunk_size:]
+            partial += view
+        if partial or index == 0:
+            yield encrypt(partial)
+        if index != count:
+            raise ValueError(f"the pieces made {index} chunks, not the {count} that {total} bytes make")
+
+    return SealedBox(PublicKey(recipient_box_key)).encrypt(key), chunks()
 
 
 def unseal_key(sealed_key: bytes, own_box: PrivateKey) -> bytes:

@@ -13,7 +13,7 @@ from schemas.errors import InvalidInput, TransferRejected
 from schemas.transfer import SiteRole
 from sync import bundle
 from sync.keys import check_identity, fingerprint, init_keys, load_keys
-from sync.sealing import open_chunks, seal, unseal_key
+from sync.sealing import OVERHEAD, open_chunks, seal, seal_stream, unseal_key
 
 
 def test_keys_are_kept_private_and_their_identity_is_self_signed(tmp_path: Path):
@@ -46,6 +46,24 @@ def test_sealed_chunks_open_only_for_the_recipient_in_their_place(tmp_path: Path
     assert moved.value.code == "chunk-forged"
     with pytest.raises(TransferRejected):  # the same chunks presented as another bundle's
         b"".join(open_chunks(key, "bundle-2", sealed.chunks, len(sealed.chunks)))
+
+
+@pytest.mark.parametrize(
+    ("split", "chunk_size"),
+    [([0], 16), ([16], 16), ([5, 27], 16), ([1, 0, 31, 1], 16), ([50, 0, 50], 7), ([5], 16)],
+)
+def test_pieces_sealed_as_they_come_open_to_the_same_bytes_in_full_chunks(tmp_path: Path, split, chunk_size):
+    center = init_keys(tmp_path / "c", "center", SiteRole.center, "Center")
+    plain = bytes(range(256))[: sum(split)]
+    pieces = [plain[sum(split[:i]) : sum(split[: i + 1])] for i in range(len(split))]
+    sealed_key, chunks = seal_stream(pieces, len(plain), bytes(center.box.public_key), "bundle-1", chunk_size)
+    chunks = list(chunks)
+    assert len(chunks) == max(1, -(-len(plain) // chunk_size))
+    assert all(len(c) == chunk_size + OVERHEAD for c in chunks[:-1])
+    key = unseal_key(sealed_key, center.box)
+    assert b"".join(open_chunks(key, "bundle-1", chunks, len(chunks))) == plain
+    with pytest.raises(ValueError, match="not the 3"):
+        list(seal_stream([b"abc"], 10, bytes(center.box.public_key), "bundle-1", 4)[1])
 
 
 def test_the_container_checks_every_part_against_its_manifest():
