@@ -135,6 +135,8 @@ def main() -> None:
                     center.stop()
                 results[name] = {**run.figures(), "stored once": stored_once(center, total)}
                 print(name, results[name], flush=True)
+                if run.undelivered or not results[name]["stored once"]:
+                    raise RuntimeError(f"{name}: not every case was stored exactly once: {results[name]}")
         finally:
             server.stop()
         results["center peak MiB, 2 MB case"] = round(peak_memory_mib(Path(tmp) / "small", 2), 1)
