@@ -306,6 +306,7 @@ class Receiver:
                 announced.site_id,
                 cutoff,
             )
+        self.bundles.sweep_unfinished(older_than_s=days * 86400)
         return len(stale)
 
     # checks -------------------------------------------------------------------------

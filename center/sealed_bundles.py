@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import os
 import shutil
+import time
 import uuid
 from collections.abc import Iterator
 from pathlib import Path
@@ -72,6 +73,15 @@ class SealedBundles:
     def forget(self, site_id: str, bundle_id: str) -> None:
         """Remove a bundle's file that no stored row names (its commit failed)."""
         shutil.rmtree(self.folder(site_id, bundle_id), ignore_errors=True)
+
+    def sweep_unfinished(self, older_than_s: float) -> int:
+        """Remove files a worker was writing when it was killed (kept under its own temporary name, never read);
+        how many."""
+        cutoff = time.time() - older_than_s
+        left = [p for p in self.root.glob(f"*/*/{SEALED_FILE}.*.tmp") if p.stat().st_mtime < cutoff]
+        for path in left:
+            path.unlink(missing_ok=True)
+        return len(left)
 
     def read(self, site_id: str, bundle_id: str, part: StoredPart) -> Iterator[bytes]:
         """The file's bytes, decrypted a chunk at a time."""

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import datetime as dt
+import os
+import time
 from pathlib import Path
 
 import msgspec
@@ -128,7 +130,13 @@ def test_unfinished_transfers_are_dropped_after_the_stale_period(tmp_path: Path)
                 "INSERT INTO incoming VALUES (?,?,?,?,?,?,?,?)", ("clinic-a", bundle_id, b"", "0" * 64, "e", 1, 1, at)
             )
             (tmp_path / "store" / "incoming" / "clinic-a" / bundle_id).mkdir(parents=True)
+    killed = tmp_path / "store" / "bundles" / "clinic-a" / "0192f3b4-6a8e-7c3d-9b1a-000000000003"
+    killed.mkdir(parents=True)
+    for name, days in (("sealed.bin.aaaa.tmp", 20), ("sealed.bin.bbbb.tmp", 0), ("sealed.bin", 20)):
+        (killed / name).write_bytes(b"x")
+        os.utime(killed / name, (time.time() - days * 86400,) * 2)
     assert receiver.drop_stale(14) == 1
+    assert sorted(p.name for p in killed.iterdir()) == ["sealed.bin", "sealed.bin.bbbb.tmp"]
     left = [r[0] for r in db.connection().execute("SELECT bundle_id FROM incoming")]
     assert left == ["0192f3b4-6a8e-7c3d-9b1a-000000000002"]
     assert not (tmp_path / "store" / "incoming" / "clinic-a" / "0192f3b4-6a8e-7c3d-9b1a-000000000001").exists()
