@@ -1,31 +1,19 @@
-"""The center's content-addressed store of bundle parts: written under a temporary name, synced, then renamed."""
+"""Files of bundles stored before the center kept them sealed (center/sealed_bundles.py): plain files named by their
+sha256 under store_dir/parts, read back as they are. Nothing new is written here."""
 
 from __future__ import annotations
 
-import hashlib
 from pathlib import Path
 
-from base.storage.durable import replace_atomically
 from schemas.errors import NotFound
 
 
 class PartStore:
     def __init__(self, root: Path):
         self.root = root
-        self.root.mkdir(parents=True, exist_ok=True)
 
     def path(self, sha256: str) -> Path:
         return self.root / sha256[:2] / sha256
-
-    def put(self, sha256: str, data: bytes) -> Path:
-        final = self.path(sha256)
-        if final.exists():  # the same bytes from another bundle or version
-            return final
-        if hashlib.sha256(data).hexdigest() != sha256:
-            raise ValueError("part bytes do not match their sha256")
-        final.parent.mkdir(exist_ok=True)
-        replace_atomically(final, data)
-        return final
 
     def read(self, sha256: str) -> bytes:
         try:
