@@ -9,6 +9,7 @@ from pathlib import Path
 import pytest
 from litestar.testing import TestClient
 
+from base.accounts.permissions import Principal
 from gateway.app import create_app
 from gateway.dependencies import Services
 from gateway.storage.database import Database
@@ -19,6 +20,8 @@ from schemas.config import Config, GatewayConfig, SecurityConfig
 SHARED = REPO.parent / "shared"
 # Argon2 at its cheapest: tests exercise the logic, the benchmark measures the real cost.
 FAST_SECURITY = SecurityConfig(argon2_time_cost=1, argon2_memory_kib=8, argon2_parallelism=1)
+CONSULTANT = Principal("u-consultant", "consult", Role.consultant, None, "session")
+"""A center's consultant as the case service sees one, for tests that call it without signing in."""
 
 
 @pytest.fixture
@@ -131,3 +134,16 @@ def pytest_runtest_setup(item) -> None:
     if fd is not None:
         faulthandler.disable()  # enable() alone would keep the replaced handler: it only installs once
         faulthandler.enable(file=fd, all_threads=True)
+
+
+@pytest.fixture(scope="module")
+def browser():
+    """Headless Chromium for a module's page tests (harness/browser.py)."""
+    from playwright.sync_api import sync_playwright
+
+    from harness.browser import launch
+
+    with sync_playwright() as playwright:
+        browser = launch(playwright)
+        yield browser
+        browser.close()

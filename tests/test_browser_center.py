@@ -8,7 +8,7 @@ import re
 
 import pytest
 
-from harness.browser import DESKTOP, PHONE, TABLET, browser_missing, launch, shot
+from harness.browser import DESKTOP, PHONE, TABLET, browser_missing, shot
 from harness.case_seed import seeded_center
 from harness.processes import PASSWORD
 from harness.sites import CenterProcess
@@ -21,16 +21,6 @@ def center(tmp_path_factory):
     center = seeded_center(tmp_path_factory.mktemp("center"), 130).start()
     yield center
     center.stop()
-
-
-@pytest.fixture(scope="module")
-def browser():
-    from playwright.sync_api import sync_playwright
-
-    with sync_playwright() as playwright:
-        browser = launch(playwright)
-        yield browser
-        browser.close()
 
 
 def latest(center: CenterProcess, where: str = "1 = 1", params: tuple = ()) -> int:

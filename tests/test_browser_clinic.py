@@ -12,7 +12,7 @@ import time
 
 import pytest
 
-from harness.browser import DESKTOP, PHONE, TABLET, browser_missing, distinct_colours, launch, shot
+from harness.browser import DESKTOP, PHONE, TABLET, browser_missing, distinct_colours, shot
 from harness.processes import PASSWORD
 from harness.sites import Sites, cli
 from processing.segmentation.infer import SHIPPED_MODEL, BurnSegmenter
@@ -38,16 +38,6 @@ def sites(tmp_path_factory):
     sites.gateway.start()
     yield sites
     sites.stop()
-
-
-@pytest.fixture(scope="module")
-def browser():
-    from playwright.sync_api import sync_playwright
-
-    with sync_playwright() as playwright:
-        browser = launch(playwright)
-        yield browser
-        browser.close()
 
 
 def expect(locator):

@@ -13,32 +13,21 @@ from pathlib import Path
 import msgspec
 import pytest
 
-from base.accounts.permissions import Principal
 from base.folders import center_store_dir
-from center.app import open_center_db
 from center.cases import CaseService
 from center.receiver import Receiver
 from harness.center_bundles import make_bundle
-from schemas.accounts import Role
-from schemas.config import CentralConfig
 from schemas.errors import StorageError, TransferRejected
-from schemas.transfer import ChunkRef, SignedEnvelope, SiteRole, TransferManifest
-from sync import peers
-from sync.keys import init_keys
+from schemas.transfer import ChunkRef, SignedEnvelope, TransferManifest
+from tests.conftest import CONSULTANT
+from tests.test_center_database import enrolled_center
 
 PHOTO = bytes(range(256)) * 64  # what harness.center_bundles packs as photos/a.jpg
-CONSULTANT = Principal("u-consultant", "consult", Role.consultant, None, "session")
 
 
 @pytest.fixture
 def center(tmp_path: Path, center_database: str):
-    central = CentralConfig(
-        database=center_database, store_dir=str(tmp_path / "store"), keys_dir=str(tmp_path / "center-keys")
-    )
-    db = open_center_db(central)
-    keys = init_keys(tmp_path / "center-keys", "center-a", SiteRole.center, "Center")
-    clinic = init_keys(tmp_path / "clinic-keys", "clinic-a", SiteRole.clinic, "Clinic")
-    peers.enrol(db, clinic.identity, by="it-person")
+    central, db, keys, clinic = enrolled_center(tmp_path, center_database)
     receiver = Receiver(db, central, keys, center_store_dir(central))
     yield central, db, keys, clinic, receiver
     db.close()

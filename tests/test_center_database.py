@@ -14,26 +14,23 @@ from pathlib import Path
 import msgspec
 import pytest
 
-from base.accounts.permissions import Principal
 from base.folders import center_store_dir
 from center.app import CentralServices, open_center_db
 from center.cases import CaseService
 from center.receiver import Receiver
 from harness.case_seed import enrol_clinics, seed_cases
 from harness.center_bundles import make_bundle
-from schemas.accounts import Role
 from schemas.central import CaseFilter, CaseState
 from schemas.config import CentralConfig, Config
 from schemas.errors import InvalidInput, TransferRejected
 from schemas.transfer import URGENCY_ORDER, SiteRole, Urgency
 from sync import peers
 from sync.keys import init_keys
+from tests.conftest import CONSULTANT
 
-CONSULTANT = Principal("u-consultant", "consult", Role.consultant, None, "session")
 
-
-@pytest.fixture
-def center(tmp_path: Path, center_database: str):
+def enrolled_center(tmp_path: Path, center_database: str):
+    """A center's config, open database and keys, with the clinic `clinic-a` enrolled (and its keys)."""
     central = CentralConfig(
         database=center_database, store_dir=str(tmp_path / "store"), keys_dir=str(tmp_path / "center-keys")
     )
@@ -41,6 +38,12 @@ def center(tmp_path: Path, center_database: str):
     keys = init_keys(tmp_path / "center-keys", "center-a", SiteRole.center, "Center")
     clinic = init_keys(tmp_path / "clinic-keys", "clinic-a", SiteRole.clinic, "Clinic")
     peers.enrol(db, clinic.identity, by="it-person")
+    return central, db, keys, clinic
+
+
+@pytest.fixture
+def center(tmp_path: Path, center_database: str):
+    central, db, keys, clinic = enrolled_center(tmp_path, center_database)
     yield central, db, keys, clinic
     db.close()
 

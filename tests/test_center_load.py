@@ -10,17 +10,15 @@ from pathlib import Path
 
 import pytest
 
-from base.accounts.permissions import Principal
 from center.app import open_center_db
 from center.cases import CaseService
 from harness.center_load import LoadCenter, run_load
 from harness.sim_clinics import photo_digest
-from schemas.accounts import Role
 from sync.keys import load_keys
+from tests.conftest import CONSULTANT
 
 pytestmark = pytest.mark.server
 CLINICS, CASES = 24, 3
-CONSULTANT = Principal("u-consultant", "consult", Role.consultant, None, "session")
 
 
 def test_clinics_under_load_with_a_worker_killed_get_every_case_stored_once(tmp_path: Path, postgres_server):

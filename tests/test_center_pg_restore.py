@@ -28,8 +28,7 @@ from schemas.transfer import ConsultationNote, MailRequest, Recommendation, Site
 from sync import peers
 from sync.keys import init_keys
 from sync.mailbox import open_note, seal_note
-from tests.conftest import FAST_SECURITY
-from tests.test_center_database import CONSULTANT
+from tests.conftest import CONSULTANT, FAST_SECURITY
 
 
 def tool(name: str, *args: str) -> None:
@@ -112,6 +111,15 @@ class Mail:
 ENCOUNTER = str(uuid.uuid4())
 
 
+def advising_center(central: CentralConfig, tmp_path: Path):
+    """An open center database with its keys, the clinic `clinic-a` enrolled, and that clinic's mailbox."""
+    db = open_center_db(central)
+    center_keys = init_keys(Path(central.keys_dir), "center-a", SiteRole.center, "Center")
+    clinic = init_keys(tmp_path / "clinic", "clinic-a", SiteRole.clinic, "Clinic")
+    peers.enrol(db, clinic.identity, by="it")
+    return db, center_keys, clinic, Mail(clinic, center_keys)
+
+
 def advise(db, center_keys, clinic, text: str) -> None:
     note = ConsultationNote(
         note_id=str(uuid.uuid4()),
@@ -133,11 +141,9 @@ def advise(db, center_keys, clinic, text: str) -> None:
 
 def test_advice_written_after_a_restore_reaches_the_clinic_that_had_read_past_the_backup(postgres_server, tmp_path):
     source = postgres_server.create_database("live")
-    db = open_center_db(CentralConfig(database=source, store_dir=str(tmp_path / "s"), keys_dir=str(tmp_path / "k")))
-    center_keys = init_keys(tmp_path / "k", "center-a", SiteRole.center, "Center")
-    clinic = init_keys(tmp_path / "clinic", "clinic-a", SiteRole.clinic, "Clinic")
-    peers.enrol(db, clinic.identity, by="it")
-    mail = Mail(clinic, center_keys)
+    db, center_keys, clinic, mail = advising_center(
+        CentralConfig(database=source, store_dir=str(tmp_path / "s"), keys_dir=str(tmp_path / "k")), tmp_path
+    )
     try:
         advise(db, center_keys, clinic, "first")
         tool("pg_dump", "--format=custom", f"--file={tmp_path / 'nightly.dump'}", source)
@@ -162,11 +168,7 @@ def test_advice_written_after_a_restore_reaches_the_clinic_that_had_read_past_th
 def test_a_sqlite_center_restored_from_a_copy_also_numbers_new_advice_past_what_the_clinic_read(tmp_path):
     live, copy = tmp_path / "center.sqlite3", tmp_path / "nightly.sqlite3"
     central = CentralConfig(database=str(live), store_dir=str(tmp_path / "s"), keys_dir=str(tmp_path / "k"))
-    db = open_center_db(central)
-    center_keys = init_keys(tmp_path / "k", "center-a", SiteRole.center, "Center")
-    clinic = init_keys(tmp_path / "clinic", "clinic-a", SiteRole.clinic, "Clinic")
-    peers.enrol(db, clinic.identity, by="it")
-    mail = Mail(clinic, center_keys)
+    db, center_keys, clinic, mail = advising_center(central, tmp_path)
     try:
         advise(db, center_keys, clinic, "first")
         with sqlite3.connect(live) as source, sqlite3.connect(copy) as target:

@@ -12,7 +12,7 @@ import pytest
 from center.workers import owner
 from harness.processes import free_port
 from harness.sites import CLINIC, CenterProcess, RouterProcess, Sites, record_case, wait_for
-from tests.test_sync_center import delivered, sent_chunks
+from tests.test_sync_center import assert_stored_once, delivered, photos_at_center, sent_chunks
 
 pytestmark = pytest.mark.server
 
@@ -63,22 +63,11 @@ def test_sigkill_of_the_worker_answering_a_clinic_mid_transfer_leaves_it_to_the_
                 for process in workers.values():  # either worker's API serves every case
                     center = process.client()
                     for entry, photos in ((one, first_photos), (two, second_photos)):
-                        detail = center.get(f"/api/v1/cases/{CLINIC}/{entry['bundle_id']}", "case")
-                        got = sorted(
-                            center.http.get(f"/api/v1/cases/{CLINIC}/{entry['bundle_id']}/parts/{p['name']}").content
-                            for p in detail["manifest"]["parts"]
-                            if p["name"].startswith("photos/")
-                        )
-                        assert got == sorted(p.read_bytes() for p in photos)
+                        assert photos_at_center(center, entry["bundle_id"]) == sorted(p.read_bytes() for p in photos)
             finally:
                 sites.gateway.stop()
                 for process in workers.values():
                     process.stop()
     finally:
         router.stop()
-    rows = sites.center.rows("SELECT bundle_id, COUNT(*) FROM bundles GROUP BY bundle_id")
-    assert sorted(r[0] for r in rows) == sorted([one["bundle_id"], two["bundle_id"]])
-    assert all(count == 1 for _, count in rows)
-    assert sites.center.rows("SELECT COUNT(*) FROM incoming") == [(0,)]
-    staging = tmp_path / "burnedge-central-store" / "incoming"
-    assert not any(p.is_file() for p in staging.rglob("*")), "staged chunks left behind"
+    assert_stored_once(sites.center, [one["bundle_id"], two["bundle_id"]])

@@ -8,7 +8,7 @@ import pytest
 
 from harness.processes import free_port
 from harness.report_pages import page_texts
-from harness.sites import Sites, noise_photo, record_case, wait_for
+from harness.sites import CLINIC, CenterProcess, Sites, noise_photo, record_case, wait_for
 
 pytestmark = pytest.mark.server
 
@@ -136,18 +136,27 @@ def test_sigkill_of_either_side_mid_transfer_still_stores_each_bundle_once(tmp_p
 
             center = sites.center_client()
             for entry, photos in ((one, first_photos), (two, second_photos)):
-                detail = center.get(f"/api/v1/cases/clinic-test/{entry['bundle_id']}", "case")
-                got = sorted(
-                    center.http.get(f"/api/v1/cases/clinic-test/{entry['bundle_id']}/parts/{p['name']}").content
-                    for p in detail["manifest"]["parts"]
-                    if p["name"].startswith("photos/")
-                )
-                assert got == sorted(p.read_bytes() for p in photos)
+                assert photos_at_center(center, entry["bundle_id"]) == sorted(p.read_bytes() for p in photos)
         finally:
             sites.stop()
-    rows = sites.center.rows("SELECT bundle_id, COUNT(*) FROM bundles GROUP BY bundle_id")
-    assert sorted(r[0] for r in rows) == sorted([one["bundle_id"], two["bundle_id"]])
+    assert_stored_once(sites.center, [one["bundle_id"], two["bundle_id"]])
+
+
+def photos_at_center(center, bundle_id: str) -> list[bytes]:
+    """The photos of the clinic's bundle as the center's API serves them, sorted."""
+    detail = center.get(f"/api/v1/cases/{CLINIC}/{bundle_id}", "case")
+    return sorted(
+        center.http.get(f"/api/v1/cases/{CLINIC}/{bundle_id}/parts/{p['name']}").content
+        for p in detail["manifest"]["parts"]
+        if p["name"].startswith("photos/")
+    )
+
+
+def assert_stored_once(center: CenterProcess, bundle_ids: list[str]) -> None:
+    """Each bundle stored once and nothing else; no transfer left open, no staged chunk left behind."""
+    rows = center.rows("SELECT bundle_id, COUNT(*) FROM bundles GROUP BY bundle_id")
+    assert sorted(r[0] for r in rows) == sorted(bundle_ids)
     assert all(count == 1 for _, count in rows)
-    assert sites.center.rows("SELECT COUNT(*) FROM incoming") == [(0,)]
-    staging = tmp_path / "burnedge-central-store" / "incoming"
+    assert center.rows("SELECT COUNT(*) FROM incoming") == [(0,)]
+    staging = center.folder / "burnedge-central-store" / "incoming"
     assert not any(p.is_file() for p in staging.rglob("*")), "staged chunks left behind"

@@ -16,15 +16,12 @@ from pathlib import Path
 import msgspec
 import pytest
 
-from base.accounts.permissions import Principal
 from center.app import open_center_db
 from center.cases import CaseService
 from harness.poor_link_sites import RATE_KBIT, outbox_entry, poor_link, record_and_queue
-from schemas.accounts import Role
 from schemas.config import CentralConfig
 from sync.keys import load_keys
-
-CONSULTANT = Principal("u-consultant", "consult", Role.consultant, None, "session")
+from tests.conftest import CONSULTANT
 
 pytestmark = pytest.mark.server
 
