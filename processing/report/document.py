@@ -2,7 +2,8 @@
 
     render(inputs) -> bytes
 
-Sections in order: who and when, primary and secondary survey with the mechanism, the burn chart with %TBSA,
+Sections in order: who and when, at a glance, allergies, medications, tetanus and the rest of the history,
+primary and secondary survey with the mechanism, the burn chart with %TBSA,
 fluids at the time the report is made, referral, each measured visit, healing over time, decision support,
 the burn center's advice. Every page carries the decision-support notice, page n of N, the report id and the
 SHA-256 over the record versions it was made from. What the record lacks is said, never filled in.
@@ -12,7 +13,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from processing.report import sections_advice, sections_analysis, sections_header, sections_record
+from processing.report import sections_advice, sections_analysis, sections_header, sections_history, sections_record
 from processing.report.inputs import ReportInputs, versions_digest
 from processing.report.layout import ReportPDF
 
@@ -35,6 +36,7 @@ def render(r: ReportInputs) -> bytes:
     pdf.add_page()
     sections_header.header(pdf, r, missing_lines(r))
     sections_header.at_a_glance(pdf, r)
+    sections_history.history(pdf, r)
     sections_record.surveys(pdf, r)
     pdf.add_page()
     sections_record.burn_chart(pdf, r)

@@ -19,7 +19,7 @@ from schemas.patient import Encounter, Patient
 from schemas.record_parts import Intake, Mechanism, PrimarySurvey, Resuscitation, SecondarySurvey
 from schemas.transfer import Consultation
 
-REPORT_FORMAT = "burnedge-report-1"
+REPORT_FORMAT = "burnedge-report-2"
 """Changes when the report's layout changes, so a cached report of the old layout is made again."""
 
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 from processing.report.figures import clock
 from processing.report.inputs import ReportInputs
 from processing.report.layout import GREY, URGENT, ReportPDF
+from processing.report.record_text import urgent_first
 from schemas.decision_support import RecommendationState
 
 STATE_WORDS = {
@@ -22,7 +23,7 @@ def decision_support(pdf: ReportPDF, r: ReportInputs) -> None:
         return
     support = record.value
     pdf.para(f"{support.notice} Judged at {clock(support.as_of)}.", colour=GREY)
-    for rec in support.recommendations:
+    for rec in urgent_first(support.recommendations):
         if pdf.get_y() > pdf.h - 60:
             pdf.add_page()
         label = rec.category.label.capitalize() + (" — URGENT" if rec.urgent else "")

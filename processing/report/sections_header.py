@@ -5,7 +5,7 @@ from __future__ import annotations
 from processing.report.figures import clock, figure
 from processing.report.inputs import ReportInputs
 from processing.report.layout import GREY, NOT_RECORDED, URGENT, ReportPDF
-from processing.report.sections_record import words
+from processing.report.record_text import words
 from schemas.clinical_results import FluidPhase
 
 

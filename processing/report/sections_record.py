@@ -6,6 +6,7 @@ from processing.report.body_diagram import draw_body_chart
 from processing.report.figures import clock, figure
 from processing.report.inputs import ReportInputs
 from processing.report.layout import GREY, URGENT, ReportPDF
+from processing.report.record_text import mechanism_text, primary_facts, secondary_lines, words
 from schemas.burn_chart import BurnDepth
 from schemas.clinical_results import FluidPhase
 
@@ -18,92 +19,25 @@ DEPTH_LABEL = {
 }
 
 
-def words(value) -> str:
-    return str(getattr(value, "value", value)).replace("_", " ")
-
-
 def surveys(pdf: ReportPDF, r: ReportInputs) -> None:
     pdf.heading("Primary survey (ABCDE)")
     if r.primary is None:
         pdf.para("No primary survey recorded.", colour=GREY)
     else:
-        s = r.primary.value
-        a, b, c, d, x = s.airway, s.breathing, s.circulation, s.disability, s.exposure
-        signs = [
-            n.replace("_", " ")
-            for n in (
-                "facial_burns",
-                "singed_nasal_hair",
-                "carbonaceous_sputum",
-                "soot_in_mouth_or_nose",
-                "hoarse_voice",
-                "stridor",
-                "oropharyngeal_oedema",
-            )
-            if getattr(a, n)
-        ]
-        gcs = [a for a in (d.gcs_eye, d.gcs_verbal, d.gcs_motor)]
-        pdf.facts(
-            [
-                ("Assessed", clock(s.assessed_at)),
-                (
-                    "A — airway",
-                    f"patent: {_yn(a.patent)}; intervention: {words(a.intervention)}; "
-                    f"signs: {', '.join(signs) or 'none recorded'}",
-                ),
-                (
-                    "B — breathing",
-                    f"RR {_n(b.respiratory_rate_per_min, '/min')}; SpO₂ {_n(b.spo2_percent, ' %')}; "
-                    f"O₂ {_n(b.oxygen_l_per_min, ' L/min')}; COHb {_n(b.carboxyhaemoglobin_percent, ' %')}"
-                    + ("; circumferential chest burn" if b.circumferential_chest_burn else ""),
-                ),
-                (
-                    "C — circulation",
-                    f"HR {_n(c.heart_rate_per_min, '/min')}; BP {_n(c.systolic_bp_mmhg)}/"
-                    f"{_n(c.diastolic_bp_mmhg)} mmHg; CRT {_n(c.capillary_refill_s, ' s')}; IV access: {_yn(c.iv_access)}"
-                    + ("; circumferential limb burn" if c.circumferential_limb_burn else ""),
-                ),
-                (
-                    "D — disability",
-                    (
-                        f"GCS {sum(gcs)} (E{d.gcs_eye} V{d.gcs_verbal} M{d.gcs_motor})"
-                        if None not in gcs
-                        else "GCS not fully recorded"
-                    )
-                    + f"; AVPU {words(d.avpu) if d.avpu else '—'}"
-                    + f"; glucose {_n(d.blood_glucose_mmol_l, ' mmol/L')}",
-                ),
-                (
-                    "E — exposure",
-                    f"temperature {_n(x.temperature_c, ' °C')}; cooled: {_yn(x.burn_cooled)}"
-                    f"{f' for {x.cooling_minutes:g} min' if x.cooling_minutes else ''}; kept warm: {_yn(x.kept_warm)}",
-                ),
-            ]
-        )
+        pdf.facts(primary_facts(r.primary.value))
     pdf.heading("Secondary survey and mechanism")
     if r.secondary is None:
         pdf.para("No secondary survey recorded.", colour=GREY)
     else:
-        s = r.secondary.value
-        lines = [f"{words(f.area)}: {f.finding}" for f in s.findings]
-        lines += [f"other injury{' (major)' if o.major else ''}: {o.description}" for o in s.other_injuries]
-        pdf.bullets(lines or ["no findings recorded"])
-        if s.notes:
-            pdf.para(s.notes)
+        pdf.bullets(secondary_lines(r.secondary.value))
+        if r.secondary.value.notes:
+            pdf.para(r.secondary.value.notes)
     if r.mechanism is None:
         pdf.para("Mechanism not recorded.", colour=GREY)
     else:
-        m = r.mechanism.value
-        extra = [
-            f"agent: {m.agent}" if m.agent else "",
-            "enclosed space" if m.enclosed_space else "",
-            f"{m.duration_s:g} s exposure" if m.duration_s is not None else "",
-            f"{m.voltage_v:g} V" if m.voltage_v is not None else "",
-            "explosion" if m.explosion else "",
-        ]
-        pdf.para(f"Mechanism: {words(m.type)}" + "".join(f"; {x}" for x in extra if x))
-        if m.description:
-            pdf.para(m.description)
+        pdf.para(mechanism_text(r.mechanism.value))
+        if r.mechanism.value.description:
+            pdf.para(r.mechanism.value.description)
 
 
 def burn_chart(pdf: ReportPDF, r: ReportInputs) -> None:
@@ -212,11 +146,3 @@ def referral(pdf: ReportPDF, r: ReportInputs) -> None:
     pdf.para(
         f"For comparison, {result.older.guideline} {result.older.version}: {result.older.recommendation}", colour=GREY
     )
-
-
-def _yn(value: bool | None) -> str:
-    return "—" if value is None else "yes" if value else "no"
-
-
-def _n(value, unit: str = "") -> str:
-    return "—" if value is None else f"{value:g}{unit}"
