@@ -23,6 +23,17 @@ DECISION_SUPPORT_NOTICE = (
 
 
 class RecommendationCategory(enum.StrEnum):
+    airway = "airway"
+    """The airway at risk from inhalation injury."""
+    breathing = "breathing"
+    """Oxygen for carbon monoxide; a chest burn that restricts breathing."""
+    circulation = "circulation"
+    """Circulation to burned limbs: neurovascular checks, escharotomy."""
+    mechanism = "mechanism"
+    """Care that depends on how the burn happened: electrical, chemical."""
+    temperature = "temperature"
+    """Keeping a patient with a large burn warm."""
+    safeguarding = "safeguarding"
     tetanus = "tetanus"
     wound_care = "wound_care"
     pain = "pain"

@@ -99,6 +99,9 @@ class Breathing(Message):
     oxygen_l_per_min: Annotated[float, msgspec.Meta(ge=0, le=60)] | None = None
     carboxyhaemoglobin_percent: Annotated[float, msgspec.Meta(ge=0, le=100)] | None = None
     circumferential_chest_burn: bool = False
+    chest_movement_restricted: bool | None = None
+    """The burn restricts the chest's movement: shallow breathing, difficulty breathing, or rising ventilation
+    pressures (an escharotomy sign)."""
     breath_sounds: ShortText = ""
 
 
@@ -219,6 +222,15 @@ class Mechanism(Message):
     voltage_v: Annotated[float, msgspec.Meta(ge=0, le=2_000_000)] | None = None
     explosion: bool = False
     description: LongText = ""
+    account_fits_injury: bool | None = None
+    """Whether the account of how it happened fits the burn seen (its pattern, depth and site, and the child's
+    stage of development); None: not judged."""
+    child_independently_mobile: bool | None = None
+    """For a child: whether they can move about on their own (crawl, walk); None: not judged or not a child."""
+    pattern_of_concern: bool | None = None
+    """A burn pattern that needs an explanation: the shape of an object (cigarette, iron), signs of forced immersion
+    (sharp, symmetrical upper limits), or a site not expected to touch a hot object by accident (the backs of the
+    hands, the soles, the buttocks, the back); None: not judged."""
 
 
 class FluidFormula(enum.StrEnum):

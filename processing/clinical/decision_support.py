@@ -13,12 +13,30 @@ import datetime as dt
 
 import msgspec
 
-from processing.clinical import fluid_advice, follow_up, infection, pain, tetanus, wound_care
+from processing.clinical import (
+    airway,
+    circulation,
+    fluid_advice,
+    follow_up,
+    infection,
+    mechanism_care,
+    oxygen,
+    pain,
+    safeguarding,
+    temperature,
+    tetanus,
+    wound_care,
+)
 from processing.clinical.decision_inputs import DecisionInputs
 from schemas.decision_support import DecisionSupport, Recommendation, RecommendationAct, RecommendationState
 from schemas.errors import InvalidInput
 
 RULES = (
+    airway.recommend,
+    oxygen.recommend,
+    circulation.recommend,
+    temperature.recommend,
+    mechanism_care.recommend,
     wound_care.recommend,
     tetanus.recommend,
     pain.recommend,
@@ -26,6 +44,7 @@ RULES = (
     infection.recommend,
     follow_up.referral,
     follow_up.timing,
+    safeguarding.recommend,
 )
 MAX_REASON = 2000
 
@@ -38,6 +57,8 @@ def recommend(inputs: DecisionInputs, computed_at: dt.datetime) -> DecisionSuppo
         recommendations += made
         missing += lacking
     recommendations += follow_up.healing_prompts(inputs)
+    # Urgent first, as the sources order care (airway, breathing, circulation before the rest); stable otherwise.
+    recommendations.sort(key=lambda r: not r.urgent)
     keys = [r.key for r in recommendations]
     if len(set(keys)) != len(keys):
         raise ValueError(f"two rules made recommendations with the same key: {keys}")

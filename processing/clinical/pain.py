@@ -1,4 +1,5 @@
-"""Pain: paracetamol for every burn, and intranasal fentanyl for a child whose pain is not controlled.
+"""Pain: paracetamol for every burn, intranasal fentanyl for a child whose pain is not controlled, and IV opioids
+for a severe burn (processing/clinical/pain_opioids.py).
 
 Weight-based doses are given only where the source gives them, from the recorded weight and capped at the
 source's maximum; with no weight, no dose is shown and the reason is. A recorded allergy to a drug blocks it.
@@ -11,7 +12,9 @@ from dataclasses import dataclass
 
 import msgspec
 
+from processing.clinical import pain_opioids
 from processing.clinical.decision_inputs import DecisionInputs
+from processing.clinical.pain_allergy import allergy_to
 from processing.clinical.sources import NHS_PARACETAMOL_ADULT, RCH_ANALGESIA
 from schemas.decision_support import InputUsed, Recommendation, RecommendationCategory
 
@@ -20,7 +23,6 @@ ADULT_FIXED_DOSE_FROM_KG = 50.0
 """The adult fixed dose is for 50 kg and over; under it the source says to check the maximum dose."""
 PARACETAMOL_FROM_MONTHS = 3.0
 FENTANYL_FROM_YEARS = 1.0
-NAMES = {"paracetamol": ("paracetamol", "acetaminophen"), "fentanyl": ("fentanyl",)}
 
 
 @dataclass(frozen=True)
@@ -44,20 +46,10 @@ PARACETAMOL_CHILD = WeightDose(per_kg=15.0, max_dose=1000.0, unit="mg", max_day_
 FENTANYL_IN_CHILD = WeightDose(per_kg=1.5, max_dose=75.0, unit="mcg")
 
 
-def _allergy(inputs: DecisionInputs, drug: str) -> tuple[str, InputUsed] | None:
-    if inputs.intake is None:
-        return None
-    for allergy in inputs.intake.value.allergies:
-        if any(name in allergy.substance.lower() for name in NAMES[drug]):
-            reaction = f" ({allergy.reaction})" if allergy.reaction else ""
-            return f"{allergy.substance}{reaction}", inputs.intake.used("allergy", allergy.substance)
-    return None
-
-
 def _paracetamol(inputs: DecisionInputs, weight: float | None, used: list[InputUsed]) -> Recommendation:
     age = inputs.age_years
     source = RCH_ANALGESIA
-    blocked = _allergy(inputs, "paracetamol")
+    blocked = allergy_to(inputs, "paracetamol")
     if blocked is not None:
         text = f"Pain: paracetamol is not advised: allergy recorded to {blocked[0]}. Choose another analgesic."
         used = [*used, blocked[1]]
@@ -92,7 +84,7 @@ def _fentanyl(inputs: DecisionInputs, weight: float | None, used: list[InputUsed
     if primary is None or not primary.value.pain_poorly_controlled or age is None or age >= ADULT_FROM_YEARS:
         return None
     used = [*used, primary.used("pain poorly controlled", True)]
-    blocked = _allergy(inputs, "fentanyl")
+    blocked = allergy_to(inputs, "fentanyl")
     if blocked is not None:
         text = f"Severe pain: intranasal fentanyl is not advised: allergy recorded to {blocked[0]}."
         used.append(blocked[1])
@@ -130,6 +122,10 @@ def recommend(inputs: DecisionInputs) -> tuple[list[Recommendation], list[str]]:
     fentanyl = _fentanyl(inputs, weight, used)
     if fentanyl is not None:
         out.append(fentanyl)
+    opioid = pain_opioids.recommend(inputs, weight, used)
+    if opioid is not None:
+        out.append(opioid)
+        out[0] = _with_detail(out[0], "Severe burn: oral doses are absorbed unreliably; the opioid is given IV.")
     missing = [] if weight is not None else ["weight: weight-based analgesic doses are not shown"]
     if inputs.age_years is not None and inputs.age_years < 12:
         out[0] = _with_detail(out[0], "No codeine under 12 years (MHRA 2013); no aspirin under 16 (NHS).")

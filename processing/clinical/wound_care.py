@@ -8,6 +8,7 @@ import datetime as dt
 
 from processing.clinical.decision_inputs import DecisionInputs
 from processing.clinical.sources import ANZCOR_FIRST_AID, ELEVATION, VICBURNS_DRESSINGS
+from processing.clinical.temperature import STOP_COOLING_BELOW_C
 from schemas.burn_chart import BurnDepth
 from schemas.decision_support import Recommendation, RecommendationCategory
 
@@ -87,6 +88,8 @@ def _cooling(inputs: DecisionInputs) -> tuple[list[Recommendation], list[str]]:
     minutes = exposure.cooling_minutes if exposure else None
     if exposure is not None and exposure.burn_cooled and minutes is not None and minutes >= COOLING_MIN:
         return [], []
+    if exposure is not None and exposure.temperature_c is not None and exposure.temperature_c < STOP_COOLING_BELOW_C:
+        return [], []  # too cold to cool: processing/clinical/temperature.py says to stop
     until = (injury + dt.timedelta(hours=COOLING_WINDOW_H)).strftime("%H:%M UTC")
     done = f" ({minutes:g} min recorded so far)" if minutes else ""
     used = [inputs.encounter.used("time of injury", injury)]
