@@ -9,7 +9,7 @@ from __future__ import annotations
 import importlib
 from dataclasses import dataclass, field
 
-from processing.fhir import codes, record, wound
+from processing.fhir import codes, history, record, wound
 from processing.fhir.codes import concept
 from processing.fhir.record import iso, ref, resource_id
 from processing.fhir.wound import Attached
@@ -103,6 +103,8 @@ def build(inputs: ReportInputs, files: BundleFiles) -> dict:
     enc = {"reference": f"urn:uuid:{resource_id('encounter', inputs.encounter.value.id)}"}
     conditions = record.conditions(inputs.chart, inputs.encounter, subject)
     resources = [patient, record.encounter(inputs.encounter, subject, conditions), *conditions]
+    resources += history.allergies(inputs.intake, subject, enc) + history.medications(inputs.intake, subject, enc)
+    resources += history.tetanus(inputs.intake, inputs.encounter, subject, enc)
     resources += record.assessment_observations(inputs.assessment, inputs.chart, inputs.encounter, subject, enc)
     resources += _analysis_resources(inputs, files, subject, enc)
     resources += record.communications(inputs.consultations, subject, enc)

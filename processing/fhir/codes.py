@@ -35,6 +35,8 @@ CONDITION_VERIFICATION = "http://terminology.hl7.org/CodeSystem/condition-ver-st
 CONDITION_CATEGORY = "http://terminology.hl7.org/CodeSystem/condition-category"
 PROVENANCE_AGENT = "http://terminology.hl7.org/CodeSystem/provenance-participant-type"
 MEDIA_TYPE = "http://terminology.hl7.org/CodeSystem/media-type"
+ALLERGY_CLINICAL = "http://terminology.hl7.org/CodeSystem/allergyintolerance-clinical"
+ALLERGY_VERIFICATION = "http://terminology.hl7.org/CodeSystem/allergyintolerance-verification"
 
 WOUND_SIZE = (LOINC, "72287-6", "Wound size panel")
 WOUND_AREA = (LOINC, "89260-4", "Area of wound")
@@ -49,6 +51,9 @@ TBSA_PARTIAL = (LOCAL_OBSERVATION, "tbsa-partial-thickness", "Partial-thickness 
 TBSA_FULL = (LOCAL_OBSERVATION, "tbsa-full-thickness", "Full-thickness burn, share of body surface")
 PHOTOGRAMMETRY = (LOCAL_METHOD, "photogrammetry-3d", "3D surface from photographs (structure from motion)")
 BURN = (SNOMED, "125666000", "Burn (disorder)")
+NO_KNOWN_ALLERGY = (SNOMED, "716186003", "No known allergy")
+"""As the International Patient Summary IG's "No known allergies" example AllergyIntolerance codes it."""
+TETANUS_HISTORY = (LOCAL_OBSERVATION, "tetanus-immunisation-history", "Tetanus immunisation history, as recorded")
 
 DEPTH_SNOMED: dict[BurnDepth, tuple[str, str, str]] = {
     BurnDepth.superficial: (SNOMED, "403190006", "Epidermal burn of skin"),
