@@ -36,6 +36,20 @@ class GatewayConfig(Message):
     """Largest JSON request body; a full sync push of 1000 mutations fits in the default."""
     clock_skew_s: Annotated[int, msgspec.Meta(ge=0)] = 300
     """Tolerance for clinical times slightly in the future (phone clocks drift)."""
+    timezone: str = ""
+    """The clinic's time zone, an IANA name such as 'Africa/Nairobi'; empty: this machine's own zone. The pages
+    show times in it, name it beside every date-time field, and read a typed time as clinic wall time (stored in
+    UTC)."""
+
+    def __post_init__(self) -> None:
+        if self.timezone:
+            try:
+                zoneinfo.ZoneInfo(self.timezone)
+            except (zoneinfo.ZoneInfoNotFoundError, ValueError) as exc:
+                raise msgspec.ValidationError(
+                    f"timezone {self.timezone!r} is not a time zone name: use an IANA name such as 'Africa/Nairobi'"
+                    " (the list: timedatectl list-timezones), or leave it empty for this machine's zone"
+                ) from exc
 
 
 class SecurityConfig(Message):
