@@ -15,6 +15,7 @@ from base.web.health import health
 from base.web.openapi import ClosedStructSchemaPlugin
 from base.web.pages.api_docs import offline_openapi_plugins
 from base.web.pages.assets import static_files
+from base.web.pages.clinic_time import CLOCK_KEY, ClinicClock
 from base.web.pages.protection import csrf_protection, security_headers
 from base.web.pages.rendering import NAV_KEY, SITE_NAME_KEY, template_config
 from gateway.controllers.analyses import AnalysisController
@@ -76,7 +77,14 @@ def create_app(config: Config, *, start_workers: bool = False) -> Litestar:
             path="/schema",
             render_plugins=offline_openapi_plugins(),
         ),
-        state=State({"services": services, SITE_NAME_KEY: SITE_NAME, NAV_KEY: NAV}),
+        state=State(
+            {
+                "services": services,
+                SITE_NAME_KEY: SITE_NAME,
+                NAV_KEY: NAV,
+                CLOCK_KEY: ClinicClock.from_setting(config.gateway.timezone, config.gateway.clock_skew_s),
+            }
+        ),
         on_startup=[lambda app: _start_background(app, services, workers)],
         on_shutdown=[lambda app: _stop_background(app, workers), lambda app: db.close()],
         request_max_body_size=config.gateway.max_body_bytes,

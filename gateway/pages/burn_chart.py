@@ -13,12 +13,12 @@ from litestar import Controller, get, post
 from litestar.params import QueryParameter
 from litestar.response import Redirect, Template
 
-from base.web.pages.forms import FormBody, field_errors, form_fields
-from base.web.pages.rendering import page, svg
+from base.web.pages.forms import FormBody, form_fields
+from base.web.pages.rendering import clinic_clock, page, svg
 from base.web.paths import IdPath
 from base.web.site import AuthedRequest
 from gateway.dependencies import Services, ServicesDep
-from gateway.pages.common import may_write, parse_or_errors, posted_version, save_part, saved_first
+from gateway.pages.common import may_write, parse_or_errors, posted_version, save_part, saved_first, service_errors
 from gateway.pages.encounter_view import encounter_header
 from processing.views.body_chart_svg import REGION_LABELS, body_chart_svg, chart_entries, region_label
 from schemas.burn_chart import BurnChart, BurnChartEntry, BurnDepth, LundBrowderRegion, RegionCharting
@@ -142,9 +142,9 @@ class BurnChartPages(Controller):
                     status_code=303,
                 )
             except VersionMismatch as exc:
-                conflict = saved_first(exc)
+                conflict = saved_first(exc, clinic_clock(request))
             except InvalidInput as exc:
-                errors = field_errors(exc.errors) if exc.errors else {"": exc.detail}
+                errors = service_errors(exc)
         fields = form_fields(RegionCharting, raw=data, errors=errors, id_prefix="region")
         status = 409 if conflict else 422
         return self._page(

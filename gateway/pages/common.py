@@ -10,6 +10,7 @@ from typing import Any
 import msgspec
 
 from base.accounts.permissions import WRITE, Principal
+from base.web.pages.clinic_time import ClinicClock
 from base.web.pages.forms import FormInvalid, field_errors, parse_form
 from gateway.dependencies import Services
 from schemas.base import ID_PATTERN
@@ -53,12 +54,12 @@ def save_part(
     return services.records.update(who, kind, record_id, body, version).record
 
 
-def saved_first(exc: VersionMismatch) -> str:
+def saved_first(exc: VersionMismatch, clock: ClinicClock | None = None) -> str:
     """What a person reads when someone else saved the same record while they were editing."""
     current = exc.current
     if isinstance(current, Record):
         who = current.meta.updated_by or "someone"
-        when = current.meta.updated_at.astimezone().strftime("%H:%M")
+        when = (clock or ClinicClock()).local(current.meta.updated_at).strftime("%H:%M")
         return (
             f"Not saved: {who} saved this at {when} (version {current.meta.version}) while you were editing. "
             "Your entries are kept below; the saved version is shown beside them. Check both, then save again."
@@ -66,19 +67,23 @@ def saved_first(exc: VersionMismatch) -> str:
     return "Not saved: someone else saved this while you were editing. Open the page again and repeat your change."
 
 
-def parse_or_errors(struct_type: type, data: dict[str, Any], fixed: dict) -> tuple[Any, dict[str, str]]:
-    """(the Struct, {}) or (None, errors by input name) — the page shows the form again with the errors."""
+def parse_or_errors(
+    struct_type: type, data: dict[str, Any], fixed: dict, tz: dt.tzinfo | None = None
+) -> tuple[Any, dict[str, str]]:
+    """(the Struct, {}) or (None, errors by input name) — the page shows the form again with the errors. Typed
+    date-times are wall time in `tz` (the clinic's zone; None: this machine's)."""
     try:
-        return parse_form(struct_type, data, fixed=fixed), {}
+        return parse_form(struct_type, data, fixed=fixed, tz=tz), {}
     except FormInvalid as exc:
         return None, field_errors(exc.errors)
+
+
+def service_errors(exc: InvalidInput) -> dict[str, str]:
+    """A service's refusal as the errors of the form shown again: on their inputs where it names JSON paths
+    ("$.time_of_injury"), else about the form as a whole ("")."""
+    return field_errors(exc.errors) if exc.errors else {"": exc.detail}
 
 
 def may_write(who: Principal, kind: RecordKind) -> bool:
     """Whether the page offers a save for this part (the service checks again on the write itself)."""
     return kind in WRITE.get(who.role, frozenset())
-
-
-def local_now_input() -> str:
-    """Now, as a datetime-local input shows it: the gateway's wall time to the minute (a form's default)."""
-    return dt.datetime.now().astimezone().strftime("%Y-%m-%dT%H:%M")

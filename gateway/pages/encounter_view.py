@@ -4,16 +4,18 @@ calculators' results, the recommendations, the burn center's traffic."""
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import msgspec
 
 from base.accounts.permissions import Principal
+from base.web.pages.forms_spec import human, struct_fields
 from base.web.pages.rendering import patient_name
 from gateway.dependencies import Services
 from schemas.clinical_results import Assessment
 from schemas.decision_support import DecisionSupport
 from schemas.errors import Forbidden, NotFound
-from schemas.records import Record, RecordKind
+from schemas.records import RECORD_TYPES, Record, RecordKind
 
 PART_PAGES = {
     "intake": RecordKind.intake,
@@ -33,6 +35,30 @@ PART_TITLES = {
     RecordKind.resuscitation: "Fluids (formula and fluid given)",
     RecordKind.burn_chart: "Burn chart",
 }
+
+OLDER_FIELDS = {RecordKind.intake: ("tetanus_status",)}
+"""Fields a newer field replaced on the form: not asked any more, kept as stored, shown read-only where they hold
+more than their default (the intake's tetanus summary: the dose count and the last dose replace it)."""
+
+
+def older_fields(kind: RecordKind) -> frozenset[str]:
+    return frozenset(OLDER_FIELDS.get(kind, ()))
+
+
+def older_values(kind: RecordKind, data: dict | None) -> dict[str, Any]:
+    """The older fields' values a save keeps: the stored ones, else their defaults."""
+    defaults = {s.name: s.default for s in struct_fields(RECORD_TYPES[kind])}
+    return {name: (data or {}).get(name, defaults[name]) for name in OLDER_FIELDS.get(kind, ())}
+
+
+def older_shown(kind: RecordKind, data: dict | None) -> list[tuple[str, str]]:
+    """(label, value) of the older fields a stored record holds beyond their defaults, for reading only."""
+    specs = {s.name: s for s in struct_fields(RECORD_TYPES[kind])}
+    return [
+        (specs[name].label, human(str(value)))
+        for name, value in older_values(kind, data).items()
+        if str(value) != str(specs[name].default)
+    ]
 
 
 @dataclass

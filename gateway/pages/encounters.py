@@ -10,20 +10,30 @@ from litestar import Controller, get, post
 from litestar.params import QueryParameter
 from litestar.response import Redirect, Template
 
-from base.web.pages.forms import FormBody, field_errors, form_fields
-from base.web.pages.rendering import page
+from base.web.pages.forms import FormBody, form_fields
+from base.web.pages.rendering import clinic_clock, page
 from base.web.paths import IdPath
 from base.web.site import AuthedRequest
 from gateway.dependencies import ServicesDep
 from gateway.pages.common import (
-    local_now_input,
     may_write,
     parse_or_errors,
+    posted_text,
     posted_version,
     save_part,
     saved_first,
+    service_errors,
 )
-from gateway.pages.encounter_view import FORM_PAGES, PART_PAGES, PART_TITLES, encounter_header, encounter_view
+from gateway.pages.encounter_view import (
+    FORM_PAGES,
+    PART_PAGES,
+    PART_TITLES,
+    encounter_header,
+    encounter_view,
+    older_fields,
+    older_shown,
+    older_values,
+)
 from schemas.decision_support import RecommendationAct
 from schemas.errors import InvalidInput, NotFound, VersionMismatch
 from schemas.records import RECORD_TYPES, Record, RecordKind
@@ -39,6 +49,13 @@ def _slug(slug: str) -> RecordKind:
     return kind
 
 
+def _stored(services, who, kind: RecordKind, encounter_id: str) -> Record | None:
+    try:
+        return services.records.get(who, kind, encounter_id)
+    except NotFound:
+        return None
+
+
 class EncounterPages(Controller):
     path = "/encounters/{encounter_id:str}"
     include_in_schema = False
@@ -47,30 +64,34 @@ class EncounterPages(Controller):
     def overview(
         self, encounter_id: IdPath, request: AuthedRequest, services: ServicesDep, saved: Saved = ""
     ) -> Template:
+        return self._overview(request, services, encounter_id, saved=saved)
+
+    def _overview(self, request, services, encounter_id, status=200, saved="", act_problem=None, act_reason=""):
+        """The overview; act_problem: (recommendation key, why the accept or decline was not stored)."""
         view = encounter_view(services, request.user, encounter_id)
         return page(
             request,
             "encounter.html",
+            status,
             view=view,
             tab="overview",
             saved=PART_TITLES.get(PART_PAGES.get(saved), "Burn chart" if saved == "burn-chart" else ""),
             part_pages=PART_PAGES,
             part_titles=PART_TITLES,
+            act_problem=act_problem,
+            act_reason=act_reason,
         )
 
     @get("/parts/{slug:str}", sync_to_thread=False)
     def part_form(self, encounter_id: IdPath, slug: str, request: AuthedRequest, services: ServicesDep) -> Template:
         kind = _slug(slug)
         encounter, patient = encounter_header(services, request.user, encounter_id)
-        try:
-            record: Record | None = services.records.get(request.user, kind, encounter_id)
-        except NotFound:
-            record = None
-        struct = RECORD_TYPES[kind]
+        record = _stored(services, request.user, kind, encounter_id)
+        struct, clock, skip = RECORD_TYPES[kind], clinic_clock(request), SKIP | older_fields(kind)
         if record is None:
-            fields = form_fields(struct, raw={"assessed_at": local_now_input()}, skip=SKIP)
+            fields = form_fields(struct, raw={"assessed_at": clock.now_input()}, skip=skip, clock=clock)
         else:
-            fields = form_fields(struct, value=msgspec.convert(record.data, struct), skip=SKIP)
+            fields = form_fields(struct, value=msgspec.convert(record.data, struct), skip=skip, clock=clock)
         return self._form(request, encounter, patient, slug, kind, fields, record, {}, None, 200)
 
     @post("/parts/{slug:str}", sync_to_thread=True, status_code=303)
@@ -79,9 +100,11 @@ class EncounterPages(Controller):
     ) -> Template | Redirect:
         kind = _slug(slug)
         encounter, patient = encounter_header(services, request.user, encounter_id)
-        struct = RECORD_TYPES[kind]
+        struct, clock, skip = RECORD_TYPES[kind], clinic_clock(request), SKIP | older_fields(kind)
         version = posted_version(data)
-        body, errors = parse_or_errors(struct, data, {"encounter_id": encounter_id})
+        stored = _stored(services, request.user, kind, encounter_id) if older_fields(kind) else None
+        fixed = {"encounter_id": encounter_id, **older_values(kind, stored.data if stored else None)}
+        body, errors = parse_or_errors(struct, data, fixed, clock.tz)
         conflict = None
         if not errors:
             try:
@@ -90,8 +113,8 @@ class EncounterPages(Controller):
             except VersionMismatch as exc:
                 conflict = exc
             except InvalidInput as exc:
-                errors = field_errors(exc.errors) if exc.errors else {"": exc.detail}
-        fields = form_fields(struct, raw=data, errors=errors, skip=SKIP)
+                errors = service_errors(exc)
+        fields = form_fields(struct, raw=data, errors=errors, skip=skip, clock=clock)
         if conflict is not None:
             current = conflict.current if isinstance(conflict.current, Record) else None
             return self._form(
@@ -103,18 +126,43 @@ class EncounterPages(Controller):
                 fields,
                 current,
                 {},
-                saved_first(conflict),
+                saved_first(conflict, clock),
                 409,
                 posted_version=version,
             )
         return self._form(
-            request, encounter, patient, slug, kind, fields, None, errors, None, 422, posted_version=version
+            request,
+            encounter,
+            patient,
+            slug,
+            kind,
+            fields,
+            None,
+            errors,
+            None,
+            422,
+            posted_version=version,
+            kept=stored,
         )
 
     def _form(
-        self, request, encounter, patient, slug, kind, fields, record, errors, conflict, status, posted_version=None
+        self,
+        request,
+        encounter,
+        patient,
+        slug,
+        kind,
+        fields,
+        record,
+        errors,
+        conflict,
+        status,
+        posted_version=None,
+        kept: Record | None = None,
     ):
+        """The part's form page; `kept`: the stored record whose older fields are shown read-only (default: record)."""
         version = record.meta.version if record is not None else (posted_version or 0)
+        kept = kept or record
         return page(
             request,
             "part_form.html",
@@ -126,6 +174,7 @@ class EncounterPages(Controller):
             fields=fields,
             version=version,
             saved_record=record if conflict else None,
+            older=older_shown(kind, kept.data if kept is not None else None),
             errors=errors,
             conflict=conflict,
             tab=slug,
@@ -133,12 +182,23 @@ class EncounterPages(Controller):
         )
 
     @post("/recommendations", sync_to_thread=True, status_code=303)
-    def act(self, encounter_id: IdPath, request: AuthedRequest, data: FormBody, services: ServicesDep) -> Redirect:
+    def act(
+        self, encounter_id: IdPath, request: AuthedRequest, data: FormBody, services: ServicesDep
+    ) -> Template | Redirect:
+        """Accept or decline; a refusal (no reason, the advice changed meanwhile) comes back on the overview, beside
+        the recommendation, with the reason as typed."""
         body, errors = parse_or_errors(RecommendationAct, data, {})
-        if errors:
-            raise InvalidInput("; ".join(f"{k or 'form'}: {v}" for k, v in errors.items()))
-        services.decision_support.act(request.user, encounter_id, body, posted_version(data))
-        return Redirect(path=f"/encounters/{encounter_id}", query_params={"saved": "decision"}, status_code=303)
+        problem, status = "; ".join(errors.values()), 422
+        if not errors:
+            try:
+                services.decision_support.act(request.user, encounter_id, body, posted_version(data))
+                return Redirect(path=f"/encounters/{encounter_id}", query_params={"saved": "decision"}, status_code=303)
+            except VersionMismatch as exc:
+                problem, status = exc.detail, 409
+            except InvalidInput as exc:
+                problem = exc.detail
+        key, reason = posted_text(data, "key"), posted_text(data, "reason")
+        return self._overview(request, services, encounter_id, status, act_problem=(key, problem), act_reason=reason)
 
     @post("/send", sync_to_thread=True, status_code=303)
     def send(self, encounter_id: IdPath, request: AuthedRequest, services: ServicesDep) -> Redirect:

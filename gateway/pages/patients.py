@@ -10,17 +10,17 @@ from litestar.params import QueryParameter
 from litestar.response import Redirect, Template
 
 from base.web.pages.forms import FormBody, form_fields
-from base.web.pages.rendering import page, patient_name, svg
+from base.web.pages.rendering import clinic_clock, page, patient_name, svg
 from base.web.paths import IdPath
 from base.web.site import AuthedRequest
 from gateway.dependencies import ServicesDep
 from gateway.pages.analyses import PAINTED_SURFACE
-from gateway.pages.common import local_now_input, parse_or_errors, posted_id
+from gateway.pages.common import parse_or_errors, posted_id, service_errors
 from processing.views.healing_plot_svg import healing_plots_svg
 from schemas.accounts import Role
-from schemas.errors import NotFound
+from schemas.errors import InvalidInput, NotFound
 from schemas.ids import uuid7
-from schemas.patient import Encounter, EncounterMode, Patient
+from schemas.patient import Encounter, Patient
 from schemas.records import Record, RecordKind
 
 Search = Annotated[str, QueryParameter(max_length=200, description="Part of a name or an identifier")]
@@ -64,11 +64,14 @@ class PatientPages(Controller):
     def create(self, request: AuthedRequest, data: FormBody, services: ServicesDep) -> Template | Redirect:
         record_id = posted_id(data)
         body, errors = parse_or_errors(Patient, data, {"id": record_id})
-        if errors:
-            fields = form_fields(Patient, raw=data, errors=errors, skip=PATIENT_SKIP)
-            return page(request, "patient_new.html", 422, fields=fields, record_id=record_id, errors=errors)
-        services.records.create(request.user, RecordKind.patient, record_id, body)
-        return Redirect(path=f"/patients/{record_id}", status_code=303)
+        if not errors:
+            try:
+                services.records.create(request.user, RecordKind.patient, record_id, body)
+                return Redirect(path=f"/patients/{record_id}", status_code=303)
+            except InvalidInput as exc:  # the service's own checks (a date of birth in the future)
+                errors = service_errors(exc)
+        fields = form_fields(Patient, raw=data, errors=errors, skip=PATIENT_SKIP)
+        return page(request, "patient_new.html", 422, fields=fields, record_id=record_id, errors=errors)
 
     @get("/patients/{patient_id:str}", sync_to_thread=False)
     def read(self, patient_id: IdPath, request: AuthedRequest, services: ServicesDep) -> Template:
@@ -98,12 +101,10 @@ class PatientPages(Controller):
     @get("/patients/{patient_id:str}/encounters/new", sync_to_thread=False)
     def new_encounter_form(self, request: AuthedRequest, patient_id: IdPath, services: ServicesDep) -> Template:
         patient = services.records.get(request.user, RecordKind.patient, patient_id)
-        raw = {
-            "mode": EncounterMode.emergency.value,
-            "time_of_arrival": local_now_input(),
-            "clinician": request.user.username,
-        }
-        fields = form_fields(Encounter, raw=raw, skip=ENCOUNTER_SKIP)
+        clock = clinic_clock(request)
+        # Arrival is now and the clinician is the one signed in; the mode is the clinician's choice, never preset.
+        raw = {"time_of_arrival": clock.now_input(), "clinician": request.user.username}
+        fields = form_fields(Encounter, raw=raw, skip=ENCOUNTER_SKIP, clock=clock)
         return page(
             request,
             "encounter_new.html",
@@ -120,18 +121,22 @@ class PatientPages(Controller):
     ) -> Template | Redirect:
         patient = services.records.get(request.user, RecordKind.patient, patient_id)
         record_id = posted_id(data)
-        body, errors = parse_or_errors(Encounter, data, {"id": record_id, "patient_id": patient_id})
-        if errors:
-            fields = form_fields(Encounter, raw=data, errors=errors, skip=ENCOUNTER_SKIP)
-            return page(
-                request,
-                "encounter_new.html",
-                422,
-                patient=patient,
-                name=patient_name(patient.data),
-                fields=fields,
-                record_id=record_id,
-                errors=errors,
-            )
-        services.records.create(request.user, RecordKind.encounter, record_id, body)
-        return Redirect(path=f"/encounters/{record_id}", status_code=303)
+        clock = clinic_clock(request)
+        body, errors = parse_or_errors(Encounter, data, {"id": record_id, "patient_id": patient_id}, clock.tz)
+        if not errors:
+            try:
+                services.records.create(request.user, RecordKind.encounter, record_id, body)
+                return Redirect(path=f"/encounters/{record_id}", status_code=303)
+            except InvalidInput as exc:  # the service's own checks: a time in the future, injury after arrival
+                errors = service_errors(exc)
+        fields = form_fields(Encounter, raw=data, errors=errors, skip=ENCOUNTER_SKIP, clock=clock)
+        return page(
+            request,
+            "encounter_new.html",
+            422,
+            patient=patient,
+            name=patient_name(patient.data),
+            fields=fields,
+            record_id=record_id,
+            errors=errors,
+        )

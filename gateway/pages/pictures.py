@@ -77,8 +77,11 @@ class PicturePages(Controller):
         files = data.get("files", [])
         files = [files] if isinstance(files, UploadFile) else [f for f in files if isinstance(f, UploadFile)]
         files = [f for f in files if f.filename]
-        if not files:
-            raise InvalidInput("choose at least one photo or video to upload")
+        if not files:  # the page again, saying so, rather than an error page
+            refused = ["nothing was uploaded: choose at least one photo or video"]
+            return Redirect(
+                path=f"/encounters/{encounter_id}/pictures", query_params={"refused": refused}, status_code=303
+            )
         stored, refused = [], []
         for upload in files:
             part = services.assets.store.part(f"form-{uuid7()}")

@@ -5,6 +5,7 @@ from __future__ import annotations
 import datetime as dt
 import re
 import sqlite3
+import zoneinfo
 
 import msgspec
 
@@ -47,8 +48,26 @@ def _bad(field: str, message: str) -> InvalidInput:
 
 
 def _not_future(value: dt.datetime | None, field: str, config: Config) -> None:
-    if value is not None and value > utcnow() + dt.timedelta(seconds=config.gateway.clock_skew_s):
-        raise _bad(field, f"{value.isoformat()} is in the future: check the phone's clock and the time entered")
+    now = utcnow()
+    if value is not None and value > now + dt.timedelta(seconds=config.gateway.clock_skew_s):
+        raise _bad(field, future_message(value, now, config))
+
+
+def future_message(value: dt.datetime, now: dt.datetime, config: Config) -> str:
+    """ "2026-03-01 14:30 is in the future: 2 h 05 min ahead of the clinic clock (now 12:25, Africa/Nairobi)...",
+    in the clinic's zone ([gateway] timezone), as the person typed it."""
+    zone = zoneinfo.ZoneInfo(config.gateway.timezone) if config.gateway.timezone else None
+    local, clock = value.astimezone(zone), now.astimezone(zone)
+    name = config.gateway.timezone or clock.tzname() or "clinic time"
+    minutes = int((value - now).total_seconds() // 60)
+    ahead = f"{minutes // 60} h {minutes % 60:02d} min" if minutes >= 60 else f"{max(minutes, 1)} min"
+    allowed = config.gateway.clock_skew_s // 60
+    return (
+        f"{local:%Y-%m-%d %H:%M} is in the future: {ahead} ahead of the clinic clock (now {clock:%H:%M}, {name}). "
+        f"Check the time entered"
+        + (f" (up to {allowed} min ahead is accepted)" if allowed else "")
+        + " and the device's clock."
+    )
 
 
 def check(conn: sqlite3.Connection, kind: RecordKind, record_id: str, struct, config: Config) -> str | None:

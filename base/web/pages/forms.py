@@ -53,8 +53,9 @@ def parse_form(struct_type: type, raw: Any, *, fixed: dict, tz: dt.tzinfo | None
 
     Empty inputs are None where the field is optional and leave the default where it has one; an unchecked box is
     False; list rows left blank are dropped. A datetime without an offset (what datetime-local sends) is wall time
-    in `tz` (None: this machine's zone). Raises FormInvalid naming every input that is wrong; an input the form
-    cannot have is "unknown field" (the page's own hidden inputs, PAGE_FIELDS, and the `fixed` names are ignored).
+    in `tz` (None: this machine's zone); every datetime comes back in UTC. Raises FormInvalid naming every input
+    that is wrong; an input the form cannot have is "unknown field" (the page's own hidden inputs, PAGE_FIELDS, and
+    the `fixed` names are ignored).
     """
     specs = [s for s in struct_fields(struct_type) if s.name not in fixed]
     received = read_raw(raw)
@@ -186,10 +187,10 @@ def _datetime(text: str, tz: dt.tzinfo | None) -> dt.datetime:
         t = None
     if t is None:
         raise _Bad("must be a date and time like 2026-12-03T14:30")
-    if t.tzinfo is not None:
-        return t
-    # A naive datetime's astimezone() reads it as this machine's local time, daylight saving included.
-    return t.replace(tzinfo=tz) if tz is not None else t.astimezone()
+    if t.tzinfo is None:
+        # A naive datetime's astimezone() reads it as this machine's local time, daylight saving included.
+        t = t.replace(tzinfo=tz) if tz is not None else t.astimezone()
+    return t.astimezone(dt.UTC)  # stored as the instant in UTC, whatever zone it was typed in
 
 
 _PLAIN = [

@@ -13,6 +13,7 @@ from typing import Any
 
 import msgspec
 
+from base.web.pages.clinic_time import ClinicClock, offset_text
 from base.web.pages.forms_spec import TRISTATE_CHOICES, FieldSpec, Kind, struct_fields
 from base.web.pages.forms_wire import checked, compact_rows, encode, first, number_text, read_raw, row_indices
 
@@ -46,6 +47,11 @@ class FormField(msgspec.Struct, frozen=True, kw_only=True):
     """A list's rows (each a list of fields), blank rows to add more at the end."""
     scalar_rows: bool = False
     """A list of plain values: each row is one field, labelled with its row number."""
+    zone_offset: int | None = None
+    """On a datetime read in the clinic's zone: its offset from UTC in minutes (east positive), which the page's
+    script compares with the phone's to say when the phone is set to another zone."""
+    zone_text: str = ""
+    """That offset as people read it ("UTC+03:00")."""
 
     @property
     def described_by(self) -> str:
@@ -61,6 +67,7 @@ class _Context(msgspec.Struct, frozen=True):
     blank_rows: int
     tz: dt.tzinfo | None
     id_prefix: str
+    clock: ClinicClock | None = None
     in_row: bool = False
     """Inside a list row: nothing is required of the browser, since a row left blank is dropped."""
 
@@ -75,17 +82,22 @@ def form_fields(
     blank_rows: int = 2,
     tz: dt.tzinfo | None = None,
     id_prefix: str = "field",
+    clock: ClinicClock | None = None,
 ) -> list[FormField]:
     """The fields of a form for `struct_type`.
 
     value: a stored record to show (None: a new one, every field at its default). raw: what the browser posted
     (a FormMultiDict or name -> list of str), shown as typed; it wins over `value`. errors: input name -> message,
     from `field_errors`. skip: input names the page fills itself ("encounter_id"). blank_rows: empty rows added to
-    each list. tz: the zone datetime inputs show wall time in (None: this machine's).
+    each list. tz: the zone datetime inputs show wall time in (None: this machine's). clock: the clinic's clock,
+    which sets tz and names the zone and the tolerance on every datetime field ("Time of injury (Africa/Nairobi,
+    UTC+03:00)").
     """
+    if clock is not None:
+        tz = clock.tz
     specs = [s for s in struct_fields(struct_type) if s.name not in skip]
     posted = compact_rows(specs, read_raw(raw)) if raw is not None else encode(specs, value, tz)
-    context = _Context(posted, errors or {}, skip, blank_rows, tz, id_prefix)
+    context = _Context(posted, errors or {}, skip, blank_rows, tz, id_prefix, clock)
     return _fields(specs, "", context)
 
 
@@ -125,8 +137,24 @@ def _field(spec: FieldSpec, name: str, ctx: _Context) -> FormField:
             step="1" if spec.number == "int" else "any",
         )
     if spec.kind == "datetime":
-        return FormField(**common, value=text, step=_datetime_step(text))
+        return _datetime_field(common, text, ctx.clock)
     return FormField(**common, value=text, maxlength=spec.max_length)
+
+
+def _datetime_field(common: dict[str, Any], text: str, clock: ClinicClock | None) -> FormField:
+    """A datetime input; with the clinic's clock, labelled with its zone and offset and helped with the tolerance."""
+    if clock is None:
+        return FormField(**common, value=text, step=_datetime_step(text))
+    offset = clock.offset()
+    label = f"{common['label']} ({clock.label()})"
+    help_text = " ".join(filter(None, [common["help"], clock.help()]))
+    return FormField(
+        **{**common, "label": label, "help": help_text},
+        value=text,
+        step=_datetime_step(text),
+        zone_offset=round(offset.total_seconds() / 60),
+        zone_text=offset_text(offset),
+    )
 
 
 def _datetime_step(text: str) -> str | None:

@@ -50,7 +50,9 @@ WORDS = {
 }
 """Abbreviations written as clinicians write them."""
 YES, NO = "yes", "no"
-TRISTATE_CHOICES = ((YES, "Yes"), (NO, "No"), ("", "Not recorded"))
+NOT_RECORDED, NOT_CHOSEN, UNKNOWN = "Not recorded", "Not chosen", "unknown"
+"""The blank option of a select; UNKNOWN: the default value that means nothing was recorded."""
+TRISTATE_CHOICES = ((YES, "Yes"), (NO, "No"), ("", NOT_RECORDED))
 
 
 def human(name: str) -> str:
@@ -167,7 +169,10 @@ def _spec(name: str, t: mi.Type, *, help_text: str | None, has_default: bool, de
         return FieldSpec(**common, kind=kind, min_length=t.min_length, max_length=t.max_length, pattern=t.pattern)
     if isinstance(t, (mi.EnumType, mi.LiteralType)):
         values = [str(m.value) for m in t.cls] if isinstance(t, mi.EnumType) else [str(v) for v in t.values]
-        return FieldSpec(**common, kind="select", choices=_choices(values, optional, common["required"]))
+        choices = _choices(values, optional, common["required"], default if has_default and not optional else None)
+        if choices[0][1] == NOT_CHOSEN:
+            common["help"] = " ".join(filter(None, [help_text, f"Left as not chosen, {human(str(default))} is saved."]))
+        return FieldSpec(**common, kind="select", choices=choices)
     if isinstance(t, mi.DateType):
         return FieldSpec(**common, kind="date")
     if isinstance(t, mi.DateTimeType):
@@ -182,10 +187,15 @@ def _spec(name: str, t: mi.Type, *, help_text: str | None, has_default: bool, de
     raise TypeError(f"field {name!r}: a form cannot show {type(t).__name__}")
 
 
-def _choices(values: list[str], optional: bool, required: bool) -> tuple[tuple[str, str], ...]:
+def _choices(values: list[str], optional: bool, required: bool, default: Any) -> tuple[tuple[str, str], ...]:
+    """A select's options, a blank one first: no form pre-selects a value the person did not choose. Left blank, an
+    optional field is not recorded, a field with a default gets it ("unknown": not recorded), a required one is
+    refused."""
     choices = [(v, human(v)) for v in values]
     if optional:
-        choices.insert(0, ("", "Not recorded"))
+        choices.insert(0, ("", NOT_RECORDED))
     elif required:
         choices.insert(0, ("", "Choose one"))
+    else:
+        choices.insert(0, ("", NOT_RECORDED if str(default) == UNKNOWN else NOT_CHOSEN))
     return tuple(choices)

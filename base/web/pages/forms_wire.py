@@ -81,10 +81,14 @@ def form_text(spec: FieldSpec, value: Any, tz: dt.tzinfo | None) -> str:
 
 
 def encode(specs: Iterable[FieldSpec], instance: Any, tz: dt.tzinfo | None, prefix: str = "") -> dict[str, list[str]]:
-    """What a browser would post for `instance` (None: every field at its default)."""
+    """What a browser would post for `instance` (None: a new form, every field at its default, but every select at
+    its blank option: a value the person did not choose is never shown chosen)."""
     out: dict[str, list[str]] = {}
     for spec in specs:
-        value = getattr(instance, spec.name) if instance is not None else spec.default
+        if instance is not None:
+            value = getattr(instance, spec.name)
+        else:
+            value = None if spec.kind in ("group", "select") else spec.default
         name = prefix + spec.name
         if spec.kind == "group":
             out.update(encode(spec.children, value, tz, name + "."))

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from jinja2 import Environment, FileSystemLoader, StrictUndefined, select_autoescape
+from jinja2 import Environment, FileSystemLoader, StrictUndefined, pass_context, select_autoescape
 from litestar import Request, Response
 from litestar.plugins.jinja import JinjaTemplateEngine
 from litestar.response import Redirect, Template
@@ -18,6 +18,8 @@ from markupsafe import Markup
 
 from base import __version__
 from base.accounts.permissions import Principal
+from base.web.pages.clinic_time import CLOCK_KEY, ClinicClock
+from base.web.pages.fluid_card import fluid_card
 from base.web.pages.forms_fields import errors_in
 from base.web.pages.session import request_csrf_token
 
@@ -42,16 +44,22 @@ def patient_name(data: dict) -> str:
     return name or "Unnamed patient"
 
 
-def local_time(value: dt.datetime | None, with_date: bool = True) -> str:
-    """A stored instant as the clinic reads it: the machine's local zone, to the minute."""
+def clinic_clock(request: Request) -> ClinicClock:
+    """The clock this server's pages read and show times in (app.state[CLOCK_KEY]; absent: this machine's zone)."""
+    clock = request.app.state.get(CLOCK_KEY)
+    return clock if isinstance(clock, ClinicClock) else ClinicClock()
+
+
+def local_time(value: dt.datetime | None, with_date: bool = True, clock: ClinicClock | None = None) -> str:
+    """A stored instant as the clinic reads it: the clinic's zone (None: the machine's), to the minute."""
     if value is None:
         return "—"
-    local = value.astimezone()
+    local = (clock or ClinicClock()).local(value)
     return local.strftime("%Y-%m-%d %H:%M" if with_date else "%H:%M")
 
 
-def when(value: str | dt.datetime | None) -> str:
-    """A stored ISO time (text or datetime) in the machine's zone, to the minute, with the zone named."""
+def when(value: str | dt.datetime | None, clock: ClinicClock | None = None) -> str:
+    """A stored ISO time (text or datetime) in the clinic's zone, to the minute, with the zone named."""
     if not value:
         return "—"
     try:
@@ -60,7 +68,12 @@ def when(value: str | dt.datetime | None) -> str:
         return str(value)
     if moment.tzinfo is None:
         return moment.strftime("%Y-%m-%d %H:%M")
-    return moment.astimezone().strftime("%Y-%m-%d %H:%M %Z").strip()
+    return (clock or ClinicClock()).local(moment).strftime("%Y-%m-%d %H:%M %Z").strip()
+
+
+def _context_clock(context) -> ClinicClock | None:
+    clock = context.get("clinic_clock")
+    return clock if isinstance(clock, ClinicClock) else None
 
 
 def number(value: float | None, digits: int = 1, unit: str = "") -> str:
@@ -78,12 +91,13 @@ def environment(directories: Sequence[Path]) -> Environment:
         trim_blocks=True,
         lstrip_blocks=True,
     )
-    env.filters["local_time"] = local_time
+    env.filters["local_time"] = pass_context(lambda c, v, with_date=True: local_time(v, with_date, _context_clock(c)))
     env.filters["number"] = number
-    env.filters["when"] = when
+    env.filters["when"] = pass_context(lambda c, v: when(v, _context_clock(c)))
     env.filters["patient_name"] = patient_name
     env.globals["version"] = __version__
     env.globals["errors_in"] = errors_in
+    env.globals["fluid_card"] = fluid_card
     return env
 
 
@@ -104,6 +118,7 @@ def page(request: Request, template: str, status_code: int = 200, **context: Any
             "site_name": request.app.state.get(SITE_NAME_KEY, "burnedge"),
             "path": request.url.path,
             "nav": request.app.state.get(NAV_KEY, []),
+            "clinic_clock": clinic_clock(request),
             **context,
         },
     )

@@ -34,3 +34,27 @@ document.addEventListener("htmx:responseError", (event) => {
 document.addEventListener("htmx:sendError", () => {
   window.alert("The gateway did not answer. Check the Wi-Fi, then try again.");
 });
+
+// Date-time fields are typed in the clinic's time. A device set to another zone is told so beside each of them
+// (the page writes the clinic's offset on a hidden note; without this script the field's label names the zone).
+function utcText(minutesEast) {
+  const sign = minutesEast < 0 ? "-" : "+";
+  const total = Math.abs(minutesEast);
+  const pad = (n) => String(n).padStart(2, "0");
+  return `UTC${sign}${pad(Math.floor(total / 60))}:${pad(total % 60)}`;
+}
+function checkZones(root) {
+  const device = -new Date().getTimezoneOffset();
+  root.querySelectorAll("[data-clinic-offset]").forEach((note) => {
+    const clinic = Number(note.dataset.clinicOffset);
+    if (Number.isNaN(clinic) || clinic === device) {
+      note.hidden = true;
+      return;
+    }
+    note.textContent =
+      `This device is set to ${utcText(device)}; enter clinic time (${note.dataset.clinicOffsetText}).`;
+    note.hidden = false;
+  });
+}
+checkZones(document);
+document.addEventListener("htmx:load", (event) => checkZones(event.target));
