@@ -77,8 +77,9 @@ def mechanism(encounter_id: str) -> Mechanism:
     return Mechanism(encounter_id=encounter_id, type=MechanismType.flame, enclosed_space=True, agent="house fire")
 
 
-def inputs(hours: float = 2.0, **changes) -> DecisionInputs:
-    """The case as the rules read it, `hours` after the injury; `changes` replace whole parts (None drops one)."""
+def inputs(hours: float = 2.0, entries: list[BurnChartEntry] | None = None, **changes) -> DecisionInputs:
+    """The case as the rules read it, `hours` after the injury, charted with `entries` (default: the case's);
+    `changes` replace whole parts (None drops one)."""
     patient = Patient(id=uuid7(), date_of_birth=dt.date(1981, 5, 2), weight_kg=80.0, height_cm=178.0)
     encounter = Encounter(
         id=uuid7(),
@@ -93,7 +94,9 @@ def inputs(hours: float = 2.0, **changes) -> DecisionInputs:
         "intake": intake(eid),
         "primary": primary(eid, INJURY + dt.timedelta(hours=1)),
         "mechanism": mechanism(eid),
-        "chart": BurnChart(encounter_id=eid, assessed_at=INJURY + dt.timedelta(hours=1), entries=chart_entries()),
+        "chart": BurnChart(
+            encounter_id=eid, assessed_at=INJURY + dt.timedelta(hours=1), entries=entries or chart_entries()
+        ),
     }
     parts.update(changes)
     kinds = {"chart": RecordKind.burn_chart, "mechanism": RecordKind.mechanism}
@@ -124,3 +127,16 @@ def with_part(base: DecisionInputs, name: str, **fields) -> DecisionInputs:
     part = getattr(base, name)
     changed = msgspec.structs.replace(part.value, **fields)
     return dataclasses.replace(base, **{name: Versioned(changed, part.ref)})
+
+
+def aged(base: DecisionInputs, age_years: float, weight_kg: float | None = None) -> DecisionInputs:
+    """`base` for a patient of another age (and weight), as the calculators would have worked it out."""
+    patient = base.patient.value
+    if weight_kg is not None:
+        patient = msgspec.structs.replace(patient, weight_kg=weight_kg)
+    return dataclasses.replace(base, age_years=age_years, patient=Versioned(patient, base.patient.ref))
+
+
+def with_mechanism(base: DecisionInputs, kind: MechanismType, **fields) -> DecisionInputs:
+    m = Mechanism(encounter_id=base.encounter.value.id, type=kind, **fields)
+    return dataclasses.replace(base, mechanism=Versioned(m, base.mechanism.ref))
