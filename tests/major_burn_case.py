@@ -99,7 +99,12 @@ def inputs(hours: float = 2.0, entries: list[BurnChartEntry] | None = None, **ch
         ),
     }
     parts.update(changes)
-    kinds = {"chart": RecordKind.burn_chart, "mechanism": RecordKind.mechanism}
+    kinds = {
+        "chart": RecordKind.burn_chart,
+        "mechanism": RecordKind.mechanism,
+        "primary": RecordKind.primary_survey,
+        "intake": RecordKind.intake,
+    }
     ref = InputRef(kind="assessment", id=eid, version=1)
     assessment = assess(
         patient=patient,
