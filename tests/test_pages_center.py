@@ -2,100 +2,30 @@
 the clinic's record, 3D viewer, photos and report, advice written through the form and followed to its delivery,
 roles, CSRF and escaping.
 
-The case is real: a clinic gateway (in this process, its API through a TestClient) records a patient, an encounter
-with a burn chart and a photo, and sends it with its own sync round over Zenoh on loopback to the center's own
-endpoint, also in this process. The 3D analysis is stored the way the gateway's job runner stores a finished one
-(its record and files), not reconstructed: a reconstruction takes minutes; tests/test_browser_clinic.py runs one.
+The case is real (tests/center_pair.py): a clinic gateway in this process records a patient, an encounter with a
+burn chart and a photo, and sends it with its own sync round over Zenoh on loopback to the center's own endpoint,
+also in this process. The record's history, ABCDE and decision support on the case page: test_pages_center_record.py.
 """
 
 from __future__ import annotations
 
 import re
+from pathlib import Path
 
-import msgspec
 import pytest
-import trimesh
 from litestar.testing import TestClient
 
-from base import folders
-from base.storage import audit
-from burnedge.demo_client import GatewayClient
-from center.app import CentralServices, create_central_app, open_center_db
-from center.endpoint import Endpoint
-from gateway.app import create_app
+from center.app import create_central_app
 from harness.bodies import encounter_body, now, patient_body
-from harness.processes import PASSWORD, free_port
 from harness.sites import noise_photo
-from schemas.accounts import Role, UserCreate
-from schemas.analysis import AnalysisResult, AnalysisStatus, BurnMetrics, ConfidenceRecord, ScaleSummary
-from schemas.config import CentralConfig, Config, GatewayConfig, SyncConfig
-from schemas.ids import uuid7
-from schemas.jobs import BurnAnalysis
-from schemas.records import RecordKind
-from schemas.transfer import SiteRole
-from sync import peers
-from sync.keys import init_keys
-from tests.conftest import FAST_SECURITY
+from tests.center_pair import SURFACE, Pair, center_pair, store_analysis
 from tests.pages_helpers import post_form, sign_in
 
 NAME = "<script>alert(1)</script>"
-SURFACE = "surface/burn_surface.glb"
 
 
-class Pair:
-    """The clinic and the center of one test module, the center's endpoint listening."""
-
-    def __init__(self, clinic, center: CentralServices, center_config: Config, bundle_id: str, job_id: str):
-        self.clinic, self.center, self.center_config = clinic, center, center_config
-        self.bundle_id, self.job_id = bundle_id, job_id
-        self.case_url = f"/cases/clinic-test/{bundle_id}"
-        self.parts_url = f"/api/v1/cases/clinic-test/{bundle_id}/parts/"
-
-    def sync_round(self) -> None:
-        report = self.clinic.transfers.sync.run_round(force=True)
-        assert report is not None and not report.rejected, report
-
-    def note_count(self) -> int:
-        return self.center.db.connection().execute("SELECT COUNT(*) FROM notes").fetchone()[0]
-
-
-def _store_analysis(clinic, config: Config, encounter_id: str, photo_ids: list[str]) -> str:
-    """A finished analysis as gateway/jobs/runner.py stores it: the burn_analysis record and its files."""
-    job_id = uuid7()
-    result = AnalysisResult(
-        status=AnalysisStatus.ok,
-        metrics=BurnMetrics(area_cm2=18.4, perimeter_cm=17.2, relief_max_mm=1.6, volume_cm3=0.42, burn_loops=1),
-        confidence=ConfidenceRecord(score=0.86, level="high", views_used=8, views_seeing_burn=8),
-        scale=ScaleSummary(method="marker", mm_per_unit=1.0, uncertainty_percent=1.5),
-        hours_since_injury=3.0,
-        provisional=True,
-    )
-    record = BurnAnalysis(
-        encounter_id=encounter_id,
-        job_id=job_id,
-        assets=photo_ids,
-        requested_by="clin",
-        requested_at=now().isoformat(),
-        completed_at=now().isoformat(),
-        result=result,
-    )
-    folder = folders.analysis_dir(config, job_id)
-    (folder / "surface").mkdir(parents=True)
-    (folder / SURFACE).write_bytes(trimesh.creation.box().export(file_type="glb"))
-    (folder / "analysis.json").write_bytes(msgspec.json.encode(result))
-    with clinic.db.write() as conn:
-        audit.insert_server_record(
-            conn,
-            kind=RecordKind.burn_analysis,
-            record_id=job_id,
-            parent_id=encounter_id,
-            data=msgspec.json.encode(record),
-            action="analysis.store",
-        )
-    return job_id
-
-
-def _record_case(api: GatewayClient, clinic, config: Config, folder) -> tuple[str, str]:
+def _record_case(pair: Pair, folder: Path) -> None:
+    api = pair.api
     patient = api.post("/api/v1/patients", patient_body(given_name=NAME), "patient")
     encounter_id = api.post("/api/v1/encounters", encounter_body(patient["meta"]["id"]), "encounter")["meta"]["id"]
     chart = {
@@ -109,55 +39,21 @@ def _record_case(api: GatewayClient, clinic, config: Config, folder) -> tuple[st
     r = api.http.put(f"/api/v1/encounters/{encounter_id}/burn-chart", json=chart, headers={"If-None-Match": "*"})
     assert r.status_code == 201, r.text
     photo = api.upload(noise_photo(folder / "photo.jpg", 1, size=(640, 480)), encounter_id)
-    job_id = _store_analysis(clinic, config, encounter_id, [photo["asset"]["id"]])
-    sent = api.http.post(f"/api/v1/encounters/{encounter_id}/transfers")
-    assert sent.status_code == 202, sent.text
-    return sent.json()["bundle_id"], job_id
+    store_analysis(pair, encounter_id, [photo["asset"]["id"]])
+    pair.send(encounter_id)
 
 
 @pytest.fixture(scope="module")
 def pair(tmp_path_factory):
     folder = tmp_path_factory.mktemp("pair")
-    port = free_port()
-    sync = SyncConfig(center_endpoints=[f"tcp/127.0.0.1:{port}"], connect_timeout_s=5, query_timeout_s=20)
-    clinic_config = Config(
-        gateway=GatewayConfig(database=str(folder / "clinic.sqlite3")), security=FAST_SECURITY, sync=sync
-    )
-    center_config = Config(
-        central=CentralConfig(database=str(folder / "center.sqlite3"), listen_endpoints=[f"tcp/127.0.0.1:{port}"]),
-        security=FAST_SECURITY,
-    )
-    clinic_keys = init_keys(folders.keys_dir(clinic_config), "clinic-test", SiteRole.clinic, "Test field clinic")
-    center_keys = init_keys(
-        folders.center_keys_dir(center_config.central), "center-test", SiteRole.center, "Test burn center"
-    )
-    center_db = open_center_db(center_config.central)
-    center = CentralServices.build(center_config, center_db)
-    peers.enrol(center_db, clinic_keys.identity, by="it-person")
-    for username, role, display in (("consult", Role.consultant, "Dr Consultant"), ("it", Role.admin, "")):
-        center.accounts.create_user(
-            None, UserCreate(username=username, password=PASSWORD, role=role, display_name=display)
-        )
-    gateway_app = create_app(clinic_config)
-    clinic = gateway_app.state.services
-    peers.enrol(clinic.db, center_keys.identity, by="it-person")
-    clinic.accounts.create_user(None, UserCreate(username="clin", password=PASSWORD, role=Role.clinician))
-    try:
-        with TestClient(gateway_app) as http, Endpoint(center_db, center_config.central, center.receiver):
-            api = GatewayClient(http=http)
-            api.login("clin", PASSWORD)
-            bundle_id, job_id = _record_case(api, clinic, clinic_config, folder)
-            pair = Pair(clinic, center, center_config, bundle_id, job_id)
-            pair.sync_round()
-            yield pair
-    finally:
-        center_db.close()
+    with center_pair(folder) as pair:
+        _record_case(pair, folder)
+        yield pair
 
 
 @pytest.fixture
 def consultant(pair):
-    with TestClient(create_central_app(pair.center_config, pair.center)) as client:
-        sign_in(client, "consult", next="/cases")
+    with pair.consultant() as client:
         yield client
 
 
@@ -194,7 +90,7 @@ def test_the_case_page_shows_the_record_the_viewer_photos_report_and_versions(pa
     assert page.status_code == 200
     html = page.text
     assert "Test field clinic" in html and "70.0 kg" in html and "Dr. Test" in html
-    assert "17.8 %" in html and "Oral / maintenance" in html  # the clinic's %TBSA and fluids (below 20 %)
+    assert "17.8 %" in html and "Oral fluids" in html  # the clinic's %TBSA and fluids (below 20 %)
     assert "3 criteria met" in html and "Thermal: full-thickness burns (any size)" in html
     glb = f"{pair.parts_url}analyses/{pair.job_id}/{SURFACE}"
     assert re.search(rf'<model-viewer id="surface-viewer" src="{re.escape(glb)}"', html)

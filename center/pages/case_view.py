@@ -1,5 +1,6 @@
-"""What the case page shows, read from the bundle the clinic sent: the record, the patient, each analysis with
-its painted surface, the photos and the report."""
+"""What the case page shows, read from the bundle the clinic sent: the record (record_view.py: history, ABCDE,
+mechanism, the burn chart, decision support), the patient, each analysis with its painted surface, the photos
+and the report."""
 
 from __future__ import annotations
 
@@ -8,6 +9,7 @@ from dataclasses import dataclass, field
 import msgspec
 
 from base.web.pages.rendering import patient_name
+from center.pages.record_view import RecordView, record_view
 from schemas.central import CaseDetail
 from schemas.clinical_results import Assessment
 from schemas.jobs import BurnAnalysis
@@ -29,6 +31,7 @@ class CaseView:
     record: EncounterRecord
     patient: Record
     assessment: Assessment | None
+    clinic_record: RecordView
     analyses: list[AnalysisView]
     photo_parts: list[str]
     report_part: str | None
@@ -68,6 +71,7 @@ def case_view(services, who, site_id: str, bundle_id: str) -> CaseView:
         record=record,
         patient=patient,
         assessment=assessment,
+        clinic_record=record_view(record, assessment),
         analyses=analyses,
         photo_parts=[n for n in names if n.startswith("photos/")],
         report_part="report.pdf" if "report.pdf" in names else None,
