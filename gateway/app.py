@@ -43,6 +43,7 @@ def create_app(config: Config, *, start_workers: bool = False) -> Litestar:
     db.migrate()
     services = Services.build(config, db)
     workers = Workers(config) if start_workers and config.jobs.workers else None
+    clock = ClinicClock.from_setting(config.gateway.timezone, config.gateway.clock_skew_s)
     return Litestar(
         route_handlers=[
             health,
@@ -67,7 +68,7 @@ def create_app(config: Config, *, start_workers: bool = False) -> Litestar:
             "services": Provide(provide_services, sync_to_thread=False, use_cache=True),
         },
         middleware=[security_headers, csrf_protection, session_auth],
-        template_config=template_config([TEMPLATES]),
+        template_config=template_config([TEMPLATES], clock),
         exception_handlers=EXCEPTION_HANDLERS,
         openapi_config=OpenAPIConfig(
             title="burnedge gateway",
@@ -82,7 +83,7 @@ def create_app(config: Config, *, start_workers: bool = False) -> Litestar:
                 "services": services,
                 SITE_NAME_KEY: SITE_NAME,
                 NAV_KEY: NAV,
-                CLOCK_KEY: ClinicClock.from_setting(config.gateway.timezone, config.gateway.clock_skew_s),
+                CLOCK_KEY: clock,
             }
         ),
         on_startup=[lambda app: _start_background(app, services, workers)],

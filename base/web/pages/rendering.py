@@ -9,7 +9,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from jinja2 import Environment, FileSystemLoader, StrictUndefined, pass_context, select_autoescape
+from jinja2 import Environment, FileSystemLoader, StrictUndefined, select_autoescape
 from litestar import Request, Response
 from litestar.plugins.jinja import JinjaTemplateEngine
 from litestar.response import Redirect, Template
@@ -71,11 +71,6 @@ def when(value: str | dt.datetime | None, clock: ClinicClock | None = None) -> s
     return (clock or ClinicClock()).local(moment).strftime("%Y-%m-%d %H:%M %Z").strip()
 
 
-def _context_clock(context) -> ClinicClock | None:
-    clock = context.get("clinic_clock")
-    return clock if isinstance(clock, ClinicClock) else None
-
-
 def number(value: float | None, digits: int = 1, unit: str = "") -> str:
     if value is None:
         return "—"
@@ -83,7 +78,8 @@ def number(value: float | None, digits: int = 1, unit: str = "") -> str:
     return f"{text} {unit}".strip()
 
 
-def environment(directories: Sequence[Path]) -> Environment:
+def environment(directories: Sequence[Path], clock: ClinicClock | None = None) -> Environment:
+    """The pages' Jinja2 environment; `clock`: the zone every shown time is in (None: this machine's)."""
     env = Environment(
         loader=FileSystemLoader([*directories, BASE_TEMPLATES]),
         autoescape=select_autoescape(default=True, default_for_string=True),
@@ -91,9 +87,9 @@ def environment(directories: Sequence[Path]) -> Environment:
         trim_blocks=True,
         lstrip_blocks=True,
     )
-    env.filters["local_time"] = pass_context(lambda c, v, with_date=True: local_time(v, with_date, _context_clock(c)))
+    env.filters["local_time"] = lambda value, with_date=True: local_time(value, with_date, clock)
     env.filters["number"] = number
-    env.filters["when"] = pass_context(lambda c, v: when(v, _context_clock(c)))
+    env.filters["when"] = lambda value: when(value, clock)
     env.filters["patient_name"] = patient_name
     env.globals["version"] = __version__
     env.globals["errors_in"] = errors_in
@@ -101,8 +97,8 @@ def environment(directories: Sequence[Path]) -> Environment:
     return env
 
 
-def template_config(directories: Sequence[Path]) -> TemplateConfig:
-    return TemplateConfig(instance=JinjaTemplateEngine.from_environment(environment(directories)))
+def template_config(directories: Sequence[Path], clock: ClinicClock | None = None) -> TemplateConfig:
+    return TemplateConfig(instance=JinjaTemplateEngine.from_environment(environment(directories, clock)))
 
 
 def page(request: Request, template: str, status_code: int = 200, **context: Any) -> Template:
@@ -118,7 +114,6 @@ def page(request: Request, template: str, status_code: int = 200, **context: Any
             "site_name": request.app.state.get(SITE_NAME_KEY, "burnedge"),
             "path": request.url.path,
             "nav": request.app.state.get(NAV_KEY, []),
-            "clinic_clock": clinic_clock(request),
             **context,
         },
     )
