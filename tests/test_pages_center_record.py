@@ -12,79 +12,11 @@ import re
 import msgspec
 import pytest
 
-from harness.bodies import encounter_body, now, patient_body
 from schemas.records import RecordKind
 from sync import case_snapshot
 from sync.bundle import PartData
-from tests.center_pair import Pair, center_pair
-
-INTAKE = {
-    "history_of_present_illness": "Paraffin stove flared while cooking indoors.",
-    "past_medical_history": "Mechanical mitral valve, 2015.",
-    "significant_comorbidities": ["mechanical heart valve"],
-    "medications": [{"name": "Warfarin", "dose": "3 mg at night"}, {"name": "Omeprazole"}],
-    "allergies": [{"substance": "Morphine", "reaction": "severe itching and vomiting"}],
-    "tetanus_doses": "three_or_more",
-    "last_tetanus_dose": "2013-05-20",
-    "severe_immunodeficiency": False,
-    "social": {"lives_with": "husband and two children"},
-}
-NEWER_INTAKE_FIELDS = ("tetanus_doses", "last_tetanus_dose", "years_since_last_tetanus_dose", "severe_immunodeficiency")
-
-
-def _put(pair: Pair, eid: str, slug: str, body: dict) -> None:
-    r = pair.api.http.put(
-        f"/api/v1/encounters/{eid}/{slug}", json={"encounter_id": eid, **body}, headers={"If-None-Match": "*"}
-    )
-    assert r.status_code == 201, r.text
-
-
-def _encounter(pair: Pair, intake: dict | None) -> str:
-    patient = pair.api.post("/api/v1/patients", patient_body(), "patient")
-    eid = pair.api.post("/api/v1/encounters", encounter_body(patient["meta"]["id"]), "encounter")["meta"]["id"]
-    if intake is not None:
-        _put(pair, eid, "intake", intake)
-    return eid
-
-
-def _full_record(pair: Pair) -> str:
-    eid = _encounter(pair, INTAKE)
-    at = now().isoformat()
-    primary = {
-        "assessed_at": at,
-        "airway": {"patent": True, "hoarse_voice": True, "soot_in_mouth_or_nose": True},
-        "breathing": {"respiratory_rate_per_min": 26, "spo2_percent": 92, "oxygen_l_per_min": 15},
-        "circulation": {"heart_rate_per_min": 118, "systolic_bp_mmhg": 104, "diastolic_bp_mmhg": 68, "iv_access": True},
-        "disability": {"gcs_eye": 4, "gcs_verbal": 5, "gcs_motor": 6, "avpu": "alert"},
-        "exposure": {"temperature_c": 36.2, "burn_cooled": True, "cooling_minutes": 20},
-    }
-    _put(pair, eid, "primary-survey", primary)
-    secondary = {
-        "assessed_at": at,
-        "findings": [{"area": "chest", "finding": "soot over the upper chest"}],
-        "other_injuries": [{"description": "sprained left wrist"}],
-    }
-    _put(pair, eid, "secondary-survey", secondary)
-    _put(pair, eid, "mechanism", {"type": "flame", "enclosed_space": True, "agent": "paraffin stove"})
-    chart = {
-        "assessed_at": at,
-        "entries": [
-            {"region": "upper_arm_left_anterior", "fraction": 1.0, "depth": "deep_partial"},
-            {"region": "trunk_anterior", "fraction": 0.5, "depth": "superficial_partial"},
-        ],
-    }
-    _put(pair, eid, "burn-chart", chart)
-    return eid
-
-
-def _act(pair: Pair, eid: str, key: str, **body) -> None:
-    current = pair.api.http.get(f"/api/v1/encounters/{eid}/decision-support")
-    r = pair.api.http.post(
-        f"/api/v1/encounters/{eid}/decision-support/acts",
-        json={"key": key, **body},
-        headers={"If-Match": current.headers["etag"]},
-    )
-    assert r.status_code == 200, r.text
+from tests.center_pair import center_pair
+from tests.center_record import NEWER_INTAKE_FIELDS, act, encounter, full_record
 
 
 def _as_an_older_clinic(real):
@@ -127,14 +59,14 @@ def _stored_before_urgent_first(real):
 @pytest.fixture(scope="module")
 def sent(tmp_path_factory):
     with center_pair(tmp_path_factory.mktemp("pair")) as pair:
-        full = _full_record(pair)
+        full = full_record(pair)
         support = pair.api.get(f"/api/v1/encounters/{full}/decision-support", "support")["data"]["recommendations"]
         routine = [r["key"] for r in support if not r["urgent"]]
-        _act(pair, full, routine[0], state="accepted")
-        _act(pair, full, routine[1], state="declined", reason="Dressing done at the district hospital")
+        act(pair, full, routine[0], state="accepted")
+        act(pair, full, routine[1], state="declined", reason="Dressing done at the district hospital")
         support = pair.api.get(f"/api/v1/encounters/{full}/decision-support", "support")["data"]["recommendations"]
-        urls = {"full": pair.send(full), "none_known": pair.send(_encounter(pair, {"no_known_allergies": True}))}
-        older = _encounter(pair, {"tetanus_status": "up_to_date", "no_known_allergies": True})
+        urls = {"full": pair.send(full), "none_known": pair.send(encounter(pair, {"no_known_allergies": True}))}
+        older = encounter(pair, {"tetanus_status": "up_to_date", "no_known_allergies": True})
         with pytest.MonkeyPatch.context() as patch:
             patch.setattr(case_snapshot, "snapshot", _as_an_older_clinic(case_snapshot.snapshot))
             urls["older"] = pair.send(older)
