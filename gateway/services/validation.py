@@ -59,7 +59,8 @@ def future_message(value: dt.datetime, now: dt.datetime, config: Config) -> str:
     zone = zoneinfo.ZoneInfo(config.gateway.timezone) if config.gateway.timezone else None
     local, clock = value.astimezone(zone), now.astimezone(zone)
     name = config.gateway.timezone or clock.tzname() or "clinic time"
-    minutes = int((value - now).total_seconds() // 60)
+    # Counted from the clinic clock as shown (to the minute), so the figures add up for the person reading them.
+    minutes = int((value - now.replace(second=0, microsecond=0)).total_seconds() // 60)
     ahead = f"{minutes // 60} h {minutes % 60:02d} min" if minutes >= 60 else f"{max(minutes, 1)} min"
     allowed = config.gateway.clock_skew_s // 60
     return (
