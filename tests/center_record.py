@@ -41,7 +41,12 @@ def full_record(pair: Pair) -> str:
     primary = {
         "assessed_at": at,
         "airway": {"patent": True, "hoarse_voice": True, "soot_in_mouth_or_nose": True},
-        "breathing": {"respiratory_rate_per_min": 26, "spo2_percent": 92, "oxygen_l_per_min": 15},
+        "breathing": {
+            "respiratory_rate_per_min": 26,
+            "spo2_percent": 92,
+            "oxygen_l_per_min": 15,
+            "chest_movement_restricted": False,
+        },
         "circulation": {"heart_rate_per_min": 118, "systolic_bp_mmhg": 104, "diastolic_bp_mmhg": 68, "iv_access": True},
         "disability": {"gcs_eye": 4, "gcs_verbal": 5, "gcs_motor": 6, "avpu": "alert"},
         "exposure": {"temperature_c": 36.2, "burn_cooled": True, "cooling_minutes": 20},
@@ -53,7 +58,12 @@ def full_record(pair: Pair) -> str:
         "other_injuries": [{"description": "sprained left wrist"}],
     }
     put(pair, eid, "secondary-survey", secondary)
-    put(pair, eid, "mechanism", {"type": "flame", "enclosed_space": True, "agent": "paraffin stove"})
+    put(
+        pair,
+        eid,
+        "mechanism",
+        {"type": "flame", "enclosed_space": True, "agent": "paraffin stove", "account_fits_injury": True},
+    )
     chart = {
         "assessed_at": at,
         "entries": [

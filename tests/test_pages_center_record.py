@@ -110,7 +110,8 @@ def test_abcde_secondary_survey_mechanism_and_the_chart_are_on_the_case_page(sen
     assert "GCS 15 (E4 V5 M6); AVPU alert" in abcde and "cooled: yes for 20 min" in abcde
     mechanism = _panel(page, "mechanism")
     assert "chest: soot over the upper chest" in mechanism and "other injury: sprained left wrist" in mechanism
-    assert "Mechanism: flame; agent: paraffin stove; enclosed space" in mechanism
+    assert "Mechanism: flame; agent: paraffin stove; enclosed space; account fits the injury: yes" in mechanism
+    assert "chest movement restricted: no" in abcde
     chart = _panel(page, "burn-chart")
     assert chart.count("<svg") == 1 and 'data-region="upper_arm_left_anterior"' in chart
     rows = re.findall(r"<tr><td>([^<]+)</td><td>([^<]+)</td><td>([^<]+)</td><td>([^<]+)</td></tr>", chart)

@@ -51,7 +51,12 @@ def primary_facts(s: PrimarySurvey) -> list[tuple[str, str]]:
             f"RR {amount(b.respiratory_rate_per_min, '/min')}; SpO₂ {amount(b.spo2_percent, ' %')}; "
             f"O₂ {amount(b.oxygen_l_per_min, ' L/min')}; COHb {amount(b.carboxyhaemoglobin_percent, ' %')}"
             + (f"; breath sounds: {b.breath_sounds}" if b.breath_sounds else "")
-            + ("; circumferential chest burn" if b.circumferential_chest_burn else ""),
+            + ("; circumferential chest burn" if b.circumferential_chest_burn else "")
+            + (
+                f"; chest movement restricted: {yes_no(b.chest_movement_restricted)}"
+                if b.chest_movement_restricted is not None
+                else ""
+            ),
         ),
         (
             "C — circulation",
@@ -98,6 +103,15 @@ def mechanism_text(m: Mechanism) -> str:
         f"{m.duration_s:g} s exposure" if m.duration_s is not None else "",
         f"{m.voltage_v:g} V" if m.voltage_v is not None else "",
         "explosion" if m.explosion else "",
+        *(
+            f"{label}: {yes_no(value)}"
+            for label, value in (
+                ("account fits the injury", m.account_fits_injury),
+                ("child independently mobile", m.child_independently_mobile),
+                ("burn pattern of concern", m.pattern_of_concern),
+            )
+            if value is not None
+        ),
     ]
     return f"Mechanism: {words(m.type)}" + "".join(f"; {x}" for x in extra if x)
 
