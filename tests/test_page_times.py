@@ -22,10 +22,10 @@ from schemas.accounts import Role
 from schemas.config import Config, GatewayConfig, load_config
 from schemas.errors import InvalidInput
 from schemas.patient import Encounter
-from schemas.record_parts import PrimarySurvey
+from schemas.record_parts import PrimarySurvey, Resuscitation
 from schemas.records import RecordKind
 from tests.conftest import FAST_SECURITY, make_user
-from tests.page_forms_helpers import EID, IDS, PID, render
+from tests.page_forms_helpers import EID, IDS, PID, flat, render
 from tests.pages_helpers import post_form, sign_in
 
 NAIROBI = zoneinfo.ZoneInfo("Africa/Nairobi")  # UTC+3 all year
@@ -88,6 +88,8 @@ def test_datetime_fields_are_labelled_with_the_clinic_zone_and_read_in_it():
     assert survey.assessed_at == dt.datetime(2026, 3, 1, 20, 30, tzinfo=dt.UTC)
     shown = {f.name: f for f in form_fields(PrimarySurvey, value=survey, skip=IDS, clock=clock)}
     assert shown["assessed_at"].value == "2026-03-01T23:30"
+    rows = {f.name: f for f in flat(form_fields(Resuscitation, skip=IDS, clock=clock))}
+    assert rows["fluid_given[0].given_at"].label == "Given at (Africa/Nairobi, UTC+03:00)"
 
 
 def test_the_future_message_is_in_the_clinic_zone():
