@@ -38,8 +38,7 @@ def render(r: ReportInputs) -> bytes:
     sections_header.at_a_glance(pdf, r)
     sections_history.history(pdf, r)
     sections_record.surveys(pdf, r)
-    pdf.add_page()
-    sections_record.burn_chart(pdf, r)
+    sections_record.burn_chart(pdf, r)  # on a new page unless the drawing fits below the surveys
     sections_record.fluids(pdf, r)
     sections_record.referral(pdf, r)
     with sections_analysis.scratch_dir() as scratch:
