@@ -54,7 +54,9 @@ def at_a_glance(pdf: ReportPDF, r: ReportInputs) -> None:
     a = r.assessment.value if r.assessment else None
     rows = []
     if a is not None and a.tbsa is not None:
-        rows.append(("%TBSA", f"{figure(a.tbsa.tbsa_percent, 'lund_browder_percent', '%')} (Lund-Browder; see Burn chart)"))
+        rows.append(
+            ("%TBSA", f"{figure(a.tbsa.tbsa_percent, 'lund_browder_percent', '%')} (Lund-Browder; see Burn chart)")
+        )
     else:
         rows.append(("%TBSA", "not computed (burn chart or age missing)"))
     if a is not None and a.referral is not None:
