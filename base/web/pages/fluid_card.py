@@ -32,7 +32,7 @@ class FluidCard:
     """Paragraphs under the figures."""
     warnings: list[str] = field(default_factory=list)
     urine: str = ""
-    """The urine output target, for the hint line ("" with no plan)."""
+    """The urine output target for the hint line, or only its basis where the advice names it ("" with no plan)."""
 
 
 def _n(x: float, digits: int = 1) -> str:
@@ -88,7 +88,8 @@ def fluid_card(assessment: Assessment) -> FluidCard:
         meta = f"formal resuscitation not indicated below {_n(plan.formal_resuscitation_threshold_percent)} %TBSA"
         if maintenance is not None:
             meta += f"; maintenance {_n(maintenance.ml_per_h)} mL/h"
-        return FluidCard(value, meta, advice, warnings, urine)
+        # The advice names the target already; the hint adds where it comes from.
+        return FluidCard(value, meta, advice, warnings, plan.urine_output_target.basis)
     meta = f"{human(plan.formula)} {_n(plan.ml_per_kg_per_percent)} mL/kg/%TBSA, {_n(plan.weight_kg)} kg ({plan.weight_source})"
     if plan.phase == FluidPhase.complete:
         value = "24-hour period over"
