@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from processing.report import sections_advice, sections_analysis, sections_header, sections_history, sections_record
+from processing.report import sections_advice, sections_analysis, sections_header, sections_record
 from processing.report.inputs import ReportInputs, versions_digest
 from processing.report.layout import ReportPDF
 
@@ -36,7 +36,7 @@ def render(r: ReportInputs) -> bytes:
     pdf.add_page()
     sections_header.header(pdf, r, missing_lines(r))
     sections_header.at_a_glance(pdf, r)
-    sections_history.history(pdf, r)
+    sections_header.history(pdf, r)
     sections_record.surveys(pdf, r)
     sections_record.burn_chart(pdf, r)  # on a new page unless the drawing fits below the surveys
     sections_record.fluids(pdf, r)

@@ -1,8 +1,11 @@
-"""The report's first page: who and when, what the record lacks, and the figures a reader looks for first."""
+"""The report's first page: who and when, what the record lacks, the figures a reader looks for first, and the
+history a clinician must see before treating (allergies, current medications, tetanus), then the rest of the
+intake."""
 
 from __future__ import annotations
 
 from processing.report.figures import clock, figure
+from processing.report.history_text import allergy_lines, history_facts, medication_lines, tetanus_lines
 from processing.report.inputs import ReportInputs
 from processing.report.layout import GREY, NOT_RECORDED, URGENT, ReportPDF
 from processing.report.record_text import words
@@ -98,3 +101,18 @@ def at_a_glance(pdf: ReportPDF, r: ReportInputs) -> None:
         for rec in support.recommendations:
             if rec.urgent and rec.state.value == "pending":
                 pdf.para(f"URGENT, pending: {rec.text}", colour=URGENT, size=8.5)
+
+
+def history(pdf: ReportPDF, r: ReportInputs) -> None:
+    pdf.heading("History: allergies, medications, tetanus", new_page_if_below=45)
+    intake = r.intake.value if r.intake else None
+    if intake is None:
+        pdf.para("No intake recorded: the history below is not known.", colour=GREY)
+    pdf.facts(
+        [
+            ("Allergies", "\n".join(allergy_lines(intake))),
+            ("Current medications", "\n".join(medication_lines(intake))),
+            ("Tetanus history", "\n".join(tetanus_lines(intake))),
+            *history_facts(intake),
+        ]
+    )
