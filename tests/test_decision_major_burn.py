@@ -2,8 +2,13 @@
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
+import msgspec
 import pytest
 
+from base.web.pages.rendering import environment
+from gateway.pages import TEMPLATES
 from processing.clinical import (
     airway,
     circulation,
@@ -236,3 +241,15 @@ def test_a_childs_burn_without_the_safeguarding_questions_says_they_are_missing(
     child = case.aged(case.inputs(), 3.0)
     _, missing = safeguarding.recommend(child)
     assert missing and "safeguarding questions" in missing[0]
+
+
+def test_the_encounter_page_lists_urgent_recommendations_first_even_from_an_older_stored_order():
+    support = decision_support.recommend(case.inputs(), computed_at=case.INJURY)
+    older = sorted(support.recommendations, key=lambda r: r.urgent)  # as a record stored before the ordering
+    view = SimpleNamespace(decision_support=msgspec.structs.replace(support, recommendations=older))
+    template = environment([TEMPLATES]).get_template("recommendations.html")
+    nurse = SimpleNamespace(role=SimpleNamespace(value="nurse"))
+    html = template.render(view=view, principal=nurse, csrf_token="x", act_problem=None, act_reason="")
+    shown = [line.split('data-key="')[1].split('"')[0] for line in html.splitlines() if 'data-key="' in line]
+    urgent = {r.key for r in older if r.urgent}
+    assert set(shown[: len(urgent)]) == urgent and shown[0] == "airway.inhalation"
