@@ -28,16 +28,33 @@ SIGNS = (
 )
 
 
-def _deep_circumferential(inputs: DecisionInputs, words: tuple[str, ...]) -> list[str]:
+def _circumferential(inputs: DecisionInputs, words: tuple[str, ...], recorded: bool, label: str):
+    """The charted regions (named by `words`) burned deep all the way round, and the facts: the chart's, and the
+    primary survey's flag `label` when `recorded`; ([], []) when neither says so."""
     chart = inputs.chart
-    if chart is None:
-        return []
-    regions = {
-        e.region.value.replace("_", " ")
-        for e in chart.value.entries
-        if e.circumferential and e.depth in DEEP and any(w in e.region.value for w in words)
-    }
-    return sorted(regions)
+    regions = sorted(
+        {
+            e.region.value.replace("_", " ")
+            for e in chart.value.entries
+            if e.circumferential and e.depth in DEEP and any(w in e.region.value for w in words)
+        }
+        if chart is not None
+        else ()
+    )
+    used: list[InputUsed] = []
+    if regions:
+        used.append(chart.used("circumferential deep burn charted", ", ".join(regions)))
+    if recorded:
+        used.append(inputs.primary.used(label, True))
+    return regions, used
+
+
+def _anticoagulant_line(inputs: DecisionInputs, used: list[InputUsed], then: str) -> list[str]:
+    """The detail naming a recorded anticoagulant (its facts added to `used`), or none."""
+    medicines = anticoagulants(inputs)
+    used += medicines
+    names = "; ".join(m.value for m in medicines)
+    return [f"Anticoagulant recorded: {names}. {then}"] if medicines else []
 
 
 def recommend(inputs: DecisionInputs) -> tuple[list[Recommendation], list[str]]:
@@ -45,26 +62,20 @@ def recommend(inputs: DecisionInputs) -> tuple[list[Recommendation], list[str]]:
 
 
 def _limb(inputs: DecisionInputs) -> list[Recommendation]:
-    regions = _deep_circumferential(inputs, LIMB_WORDS)
     circulation = inputs.primary.value.circulation if inputs.primary is not None else None
     recorded = circulation is not None and circulation.circumferential_limb_burn
-    if not regions and not recorded:
+    regions, used = _circumferential(inputs, LIMB_WORDS, recorded, "circumferential limb burn")
+    if not used:
         return []
-    used: list[InputUsed] = []
-    if regions:
-        used.append(inputs.chart.used("circumferential deep burn charted", ", ".join(regions)))
-    if recorded:
-        used.append(inputs.primary.used("circumferential limb burn", True))
     pulseless = circulation is not None and circulation.distal_pulses_present is False
     if pulseless:
         used.append(inputs.primary.used("distal pulses present", False))
     where = f" ({', '.join(regions)})" if regions else ""
-    medicines = anticoagulants(inputs)
-    details = [CHECKS, SIGNS]
-    if medicines:
-        used += medicines
-        names = "; ".join(m.value for m in medicines)
-        details.insert(0, f"Anticoagulant recorded: {names}. Escharotomy is expected to bleed: tell the burn surgeon.")
+    details = [
+        *_anticoagulant_line(inputs, used, "Escharotomy is expected to bleed: tell the burn surgeon."),
+        CHECKS,
+        SIGNS,
+    ]
     if pulseless:
         text = (
             f"Circulation: absent distal pulses with a circumferential burn of a limb{where}. Rule out low blood "
@@ -90,16 +101,11 @@ def _limb(inputs: DecisionInputs) -> list[Recommendation]:
 
 
 def _chest(inputs: DecisionInputs) -> list[Recommendation]:
-    regions = _deep_circumferential(inputs, ("trunk",))
     breathing = inputs.primary.value.breathing if inputs.primary is not None else None
     recorded = breathing is not None and breathing.circumferential_chest_burn
-    if not regions and not recorded:
+    _, used = _circumferential(inputs, ("trunk",), recorded, "circumferential chest burn")
+    if not used:
         return []
-    used: list[InputUsed] = []
-    if regions:
-        used.append(inputs.chart.used("circumferential deep burn charted", ", ".join(regions)))
-    if recorded:
-        used.append(inputs.primary.used("circumferential chest burn", True))
     restricted = breathing is not None and breathing.chest_movement_restricted is True
     if restricted:
         used.append(inputs.primary.used("chest movement restricted", True))
@@ -112,12 +118,10 @@ def _chest(inputs: DecisionInputs) -> list[Recommendation]:
             "Breathing: circumferential burn of the chest: sit the patient up and watch for restricted breathing "
             "(shallow breaths, difficulty breathing, rising ventilation pressures), which calls for chest escharotomy."
         )
-    details = ["Chest escharotomy is done after the burn service's advice (Victorian Adult Burns Service)."]
-    medicines = anticoagulants(inputs)
-    if medicines:
-        used += medicines
-        names = "; ".join(m.value for m in medicines)
-        details.insert(0, f"Anticoagulant recorded: {names}. Expect bleeding (Joint Trauma System): tell the surgeon.")
+    details = [
+        *_anticoagulant_line(inputs, used, "Expect bleeding (Joint Trauma System): tell the surgeon."),
+        "Chest escharotomy is done after the burn service's advice (Victorian Adult Burns Service).",
+    ]
     return [
         Recommendation(
             key="breathing.chest_escharotomy",
