@@ -40,7 +40,7 @@ class SealedWriter:
         self.final = final
         final.parent.mkdir(parents=True, exist_ok=True)
         self._tmp = final.with_name(f"{final.name}.{uuid.uuid4().hex}.tmp")
-        self._file = open(self._tmp, "xb")  # noqa: SIM115 (closed by close_durably or discard)
+        self._file = open(self._tmp, "xb")  # closed by close_durably or discard
 
     def write(self, ciphertext: bytes) -> None:
         self._file.write(ciphertext)

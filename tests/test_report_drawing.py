@@ -34,8 +34,22 @@ def _page() -> FPDF:
 def _raster(pdf: FPDF, tmp_path: Path) -> np.ndarray:
     """The first page as RGB pixels at DPI."""
     (tmp_path / "page.pdf").write_bytes(bytes(pdf.output()))
-    subprocess.run(["pdftoppm", "-r", str(DPI), "-png", "-singlefile", "-f", "1", "-l", "1",
-                    str(tmp_path / "page.pdf"), str(tmp_path / "page")], check=True)  # fmt: skip
+    subprocess.run(
+        [
+            "pdftoppm",
+            "-r",
+            str(DPI),
+            "-png",
+            "-singlefile",
+            "-f",
+            "1",
+            "-l",
+            "1",
+            str(tmp_path / "page.pdf"),
+            str(tmp_path / "page"),
+        ],
+        check=True,
+    )
     return cv2.cvtColor(cv2.imread(str(tmp_path / "page.png")), cv2.COLOR_BGR2RGB)
 
 
@@ -97,8 +111,18 @@ def test_body_chart_fills_charted_regions_with_their_depth_colour(tmp_path):
 def test_line_plot_draws_the_points_it_is_given(tmp_path, n):
     points = [(2.0, 41.3), (6.0, 33.0), (10.0, 24.8), (15.0, 14.1)][:n]
     pdf = _page()
-    plots.line_plot(pdf, 20, 20, 90, 55, points=points, title="Burn area", y_label="area (cm²)",
-                    fit=(45.2, -2.1) if n > 1 else None, marks=[(21.0, "Deitch 21 d")])  # fmt: skip
+    plots.line_plot(
+        pdf,
+        20,
+        20,
+        90,
+        55,
+        points=points,
+        title="Burn area",
+        y_label="area (cm²)",
+        fit=(45.2, -2.1) if n > 1 else None,
+        marks=[(21.0, "Deitch 21 d")],
+    )
     image = _raster(pdf, tmp_path)
     series = np.all(np.abs(image.astype(int) - plots.SERIES) <= 8, axis=2)
     blobs = cv2.connectedComponents(series.astype(np.uint8))[0] - 1
@@ -174,9 +198,16 @@ def _write_analysis(folder: Path, *, flip_winding: bool) -> None:
     q[np.hypot(x, y) > 28] = np.nan  # outside the region looked at: neither burn nor healthy
     (folder / "surface").mkdir(parents=True)
     (folder / "mesh").mkdir()
-    np.savez_compressed(folder / "surface" / "burn_surface.npz", vertices=vertices, faces=faces, q=q,
-                        views_per_vertex=np.full(len(q), 3), view_sees_burn=np.ones(3, bool),
-                        view_names=np.array(["a.jpg", "b.jpg", "c.jpg"]), q_noisy_or=q)  # fmt: skip
+    np.savez_compressed(
+        folder / "surface" / "burn_surface.npz",
+        vertices=vertices,
+        faces=faces,
+        q=q,
+        views_per_vertex=np.full(len(q), 3),
+        view_sees_burn=np.ones(3, bool),
+        view_names=np.array(["a.jpg", "b.jpg", "c.jpg"]),
+        q_noisy_or=q,
+    )
     mesh = o3d.geometry.TriangleMesh(o3d.utility.Vector3dVector(vertices), o3d.utility.Vector3iVector(faces))
     mesh.vertex_colors = o3d.utility.Vector3dVector(np.tile(SKIN, (len(vertices), 1)))
     mesh.vertex_normals = o3d.utility.Vector3dVector(np.tile([0.0, 0.0, 1.0], (len(vertices), 1)))

@@ -102,8 +102,10 @@ def test_text_is_escaped():
 
 
 def test_chart_entries_group_a_charts_rows_and_bad_fractions_are_refused():
-    rows = [BurnChartEntry(region=R.hand_left_dorsal, fraction=0.4, depth=D.superficial),
-            BurnChartEntry(region=R.hand_left_dorsal, fraction=0.1, depth=D.deep_partial)]  # fmt: skip
+    rows = [
+        BurnChartEntry(region=R.hand_left_dorsal, fraction=0.4, depth=D.superficial),
+        BurnChartEntry(region=R.hand_left_dorsal, fraction=0.1, depth=D.deep_partial),
+    ]
     assert chart_entries(rows) == {R.hand_left_dorsal: [(0.4, D.superficial), (0.1, D.deep_partial)]}
     shape = _regions(_parse(body_chart_svg(chart_entries(rows))))["hand_left_dorsal"]
     assert (
@@ -122,8 +124,18 @@ POINTS = [(2.0, 41.3), (6.0, 33.0), (10.0, 24.8), (15.0, 14.1)]
 
 def test_the_healing_plot_draws_each_visit_the_fit_and_the_projected_closure():
     closure = Closure(21.7, 18.0, 27.0)
-    root = _parse(healing_plot_svg(points=POINTS, title="Burn area", y_label="cm²", unit="cm²", digits=1,
-                                   fit=(45.2, -2.1), closure=closure, marks=[(21.0, "day 21")]))  # fmt: skip
+    root = _parse(
+        healing_plot_svg(
+            points=POINTS,
+            title="Burn area",
+            y_label="cm²",
+            unit="cm²",
+            digits=1,
+            fit=(45.2, -2.1),
+            closure=closure,
+            marks=[(21.0, "day 21")],
+        )
+    )
     circles = root.findall(".//s:circle[@class='visit']", NS)
     assert len(circles) == 4 and circles[0].find("s:title", NS).text == "day 2: 41.3 cm²"
     assert len(root.findall(".//s:polyline", NS)) == 1
@@ -140,8 +152,11 @@ def test_the_healing_plot_draws_each_visit_the_fit_and_the_projected_closure():
 
 @pytest.mark.parametrize("n", [0, 1])
 def test_under_two_visits_draws_axes_and_says_so_never_a_line(n):
-    root = _parse(healing_plot_svg(points=POINTS[:n], title="Burn area", y_label="cm²", fit=(45.2, -2.1),
-                                   closure=Closure(21.7, 18.0, 27.0)))  # fmt: skip
+    root = _parse(
+        healing_plot_svg(
+            points=POINTS[:n], title="Burn area", y_label="cm²", fit=(45.2, -2.1), closure=Closure(21.7, 18.0, 27.0)
+        )
+    )
     assert len(root.findall(".//s:circle[@class='visit']", NS)) == n
     assert not root.findall(".//s:polyline", NS) and root.find(".//s:line[@class='fit']", NS) is None
     assert root.find(".//s:g[@class='closure']", NS) is None and root.find(".//s:g[@class='axes']", NS) is not None
@@ -150,14 +165,19 @@ def test_under_two_visits_draws_axes_and_says_so_never_a_line(n):
 
 
 def _session(day, area, relief=None, volume=None, status="ok"):
-    return TrackSession(day=day, label=f"day {day}", analysis="a", status=status, area_cm2=area,
-                        relief_max_mm=relief, volume_cm3=volume)  # fmt: skip
+    return TrackSession(
+        day=day, label=f"day {day}", analysis="a", status=status, area_cm2=area, relief_max_mm=relief, volume_cm3=volume
+    )
 
 
 def test_healing_plots_of_a_track_take_the_pdfs_figures_and_leave_unscaled_visits_out():
     sessions = [_session(d, a, a / 10, a / 8) for d, a in POINTS] + [_session(18.0, None, status="unscaled")]
-    track = TrackResult(sessions=sessions, healing_rate_cm2_per_day=2.1, projected_closure_day=21.7,
-                        projected_closure_range_days=[18.0, None])  # fmt: skip
+    track = TrackResult(
+        sessions=sessions,
+        healing_rate_cm2_per_day=2.1,
+        projected_closure_day=21.7,
+        projected_closure_range_days=[18.0, None],
+    )
     plots = healing_plots_svg(track)
     assert [t for t, _ in plots] == ["Burn area", "Deepest relief (geometry)", "Volume below reference"]
     area, relief, volume = (_parse(svg) for _, svg in plots)

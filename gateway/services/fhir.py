@@ -101,7 +101,6 @@ class FhirService:
                 "the FHIR Bundle made of this encounter did not validate: a fault in burnedge, not in the record; "
                 "nothing was sent (the gateway's log names the resource)"
             ) from exc
-        out = fhir_bundle.build(inputs, files)
         with self.db.write() as conn:
             audit.append(
                 conn,

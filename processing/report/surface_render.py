@@ -31,8 +31,16 @@ MARGIN = 1.7
 """The frame spans the burn's extent times this (skin around it for context), within the mesh's extent."""
 MIN_FRAME_SHARE = 0.35
 """...and at least this share of the mesh's extent, so a small burn is not shown magnified out of context."""
-PLY_TYPES = {"char": "i1", "uchar": "u1", "short": "<i2", "ushort": "<u2", "int": "<i4", "uint": "<u4",
-             "float": "<f4", "double": "<f8"}  # fmt: skip
+PLY_TYPES = {
+    "char": "i1",
+    "uchar": "u1",
+    "short": "<i2",
+    "ushort": "<u2",
+    "int": "<i4",
+    "uint": "<u4",
+    "float": "<f4",
+    "double": "<f8",
+}
 
 
 def read_ply_vertices(path: Path) -> dict[str, np.ndarray]:
