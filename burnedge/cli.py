@@ -89,6 +89,7 @@ def _size(text: str) -> tuple[int, int]:
 
 def cmd_worker(args: argparse.Namespace) -> int:
     from gateway.jobs.worker import main as worker_main
+    from gateway.services.reactions import ANALYSIS_STORED
     from gateway.storage.database import Database
 
     config = _config(args)
@@ -97,7 +98,7 @@ def cmd_worker(args: argparse.Namespace) -> int:
         db.migrate()
     finally:
         db.close()
-    ran = worker_main(config, supervised=False, drain=args.drain)
+    ran = worker_main(config, supervised=False, drain=args.drain, reactions=ANALYSIS_STORED)
     log.info("worker stopped after %d analyses", ran)
     return 0
 

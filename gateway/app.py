@@ -33,6 +33,7 @@ from gateway.dependencies import Services, provide_services
 from gateway.jobs.supervisor import Workers
 from gateway.pages import NAV, SITE_NAME, TEMPLATES, page_controllers
 from gateway.scheduler import start_scheduler
+from gateway.services.reactions import ANALYSIS_STORED
 from gateway.storage.database import Database
 from schemas.config import Config
 
@@ -42,7 +43,7 @@ def create_app(config: Config, *, start_workers: bool = False) -> Litestar:
     db = Database.from_config(config.gateway)
     db.migrate()
     services = Services.build(config, db)
-    workers = Workers(config) if start_workers and config.jobs.workers else None
+    workers = Workers(config, ANALYSIS_STORED) if start_workers and config.jobs.workers else None
     clock = ClinicClock.from_setting(config.gateway.timezone, config.gateway.clock_skew_s)
     return Litestar(
         route_handlers=[

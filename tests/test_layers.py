@@ -1,8 +1,8 @@
 """The import graph runs one way: schemas -> base -> processing, sync -> gateway, center -> the command line on top.
 
 An AST walk over every module (imports inside functions included) finds each import of a project module; a module
-may import its own layer or those below, never one above, never a sibling server, and no circle of modules may
-form. A second test loads the burn center's app in a fresh interpreter and checks it pulls in no gateway code and no
+may import its own layer or those below, never one above, never a sibling server, and no circle of modules, nor of
+sibling packages (gateway.jobs and gateway.services, say), may form. A second test loads the burn center's app in a fresh interpreter and checks it pulls in no gateway code and no
 OpenCV.
 """
 
@@ -121,12 +121,52 @@ def module_circles(graph: dict[str, set[str]]) -> list[list[str]]:
     return circles
 
 
+def package_of(module: str, modules: dict[str, Path]) -> str:
+    """The package a module lives in (a package's __init__ is the package itself)."""
+    return module if modules[module].name == "__init__.py" else module.rpartition(".")[0]
+
+
+def package_graph(graph: dict[str, set[str]], modules: dict[str, Path]) -> dict[str, set[str]]:
+    """Package -> the packages its modules import, leaving out a package's own ancestors and descendants: a package
+    uses what contains it (gateway.controllers reads gateway.dependencies) and composes what it contains (gateway.app
+    wires gateway.controllers); siblings, and their descendants, must not import each other both ways."""
+    packages: dict[str, set[str]] = {}
+    for source, targets in graph.items():
+        src = package_of(source, modules)
+        packages.setdefault(src, set())
+        for target in targets:
+            dst = package_of(target, modules)
+            if dst == src or dst.startswith(src + ".") or src.startswith(dst + "."):
+                continue
+            packages[src].add(dst)
+            packages.setdefault(dst, set())
+    return packages
+
+
 def test_no_module_imports_from_a_layer_above_its_own():
     assert upward_imports(import_graph()) == []
 
 
 def test_no_circle_of_modules_remains():
     assert module_circles(import_graph()) == []
+
+
+def test_no_circle_of_packages_remains():
+    assert module_circles(package_graph(import_graph(), project_modules())) == []
+
+
+def test_the_package_check_sees_a_circle_between_sibling_packages_but_not_a_parent_and_its_child():
+    modules = {
+        name: Path(f"{name.replace('.', '/')}.py")
+        for name in ("gateway.app", "gateway.dependencies", "gateway.jobs.runner", "gateway.services.support")
+    }
+    siblings = {
+        "gateway.jobs.runner": {"gateway.services.support"},
+        "gateway.services.support": {"gateway.jobs.runner"},
+    }
+    assert module_circles(package_graph(siblings, modules)) == [["gateway.jobs", "gateway.services"]]
+    nested = {"gateway.app": {"gateway.services.support"}, "gateway.services.support": {"gateway.dependencies"}}
+    assert module_circles(package_graph(nested, modules)) == []
 
 
 def test_the_checks_see_an_upward_import_and_a_circle():

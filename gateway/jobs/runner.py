@@ -16,6 +16,7 @@ import shutil
 import signal
 import time
 import traceback
+from collections.abc import Sequence
 from pathlib import Path
 
 import msgspec
@@ -26,9 +27,8 @@ from base.storage import records as store
 from base.storage.blobs import MediaStore
 from gateway.jobs import folders
 from gateway.jobs.capture_time import hours_since_injury
+from gateway.jobs.events import AnalysisStored, Reaction, publish
 from gateway.jobs.queue import Claim, JobQueue
-from gateway.jobs.timeline import update_track
-from gateway.services.decision_support import refresh_patient
 from gateway.storage import jobs
 from gateway.storage.database import Database
 from processing.analysis.pipeline import Patient
@@ -56,8 +56,9 @@ STAGES = {  # stage: (share of the work done when it starts, what the user sees)
 }
 
 
-def run(config: Config, claim: Claim) -> JobState:
-    """Run one try of the job; returns the state it was left in."""
+def run(config: Config, claim: Claim, reactions: Sequence[Reaction] = ()) -> JobState:
+    """Run one try of the job; returns the state it was left in. Once stored, the analysis is published to
+    `reactions` (gateway/jobs/events.py)."""
     db = Database.from_config(config.gateway)
     queue = JobQueue(db, config.jobs)
     try:
@@ -84,14 +85,8 @@ def run(config: Config, claim: Claim) -> JobState:
         )
         state = _store(db, queue, claim, job, inputs, result)
         if state is JobState.done:
-            try:
-                update_track(db, config, job.patient_id)
-            except Exception:
-                log.exception("healing track of patient %s not updated", job.patient_id)
-            try:
-                refresh_patient(db, config, job.patient_id)
-            except Exception:
-                log.exception("decision support of patient %s not refreshed", job.patient_id)
+            event = AnalysisStored(job_id=claim.job_id, encounter_id=job.encounter_id, patient_id=job.patient_id)
+            publish(reactions, db, config, event)
         return state
     finally:
         db.close()
@@ -192,14 +187,14 @@ def _store(
     return JobState.done
 
 
-def child_main(config: Config, claim: Claim) -> None:
+def child_main(config: Config, claim: Claim, reactions: Sequence[Reaction] = ()) -> None:
     """Entry point of the job's process: dies with its worker, records a crash of its own for a retry."""
     _die_with_parent()
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # its worker decides when it stops
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(levelname)s %(name)s: %(message)s")
     started = time.perf_counter()
     try:
-        state = run(config, claim)
+        state = run(config, claim, reactions)
     except BurnedgeError as exc:
         if isinstance(exc, StorageError):  # the database was busy: worth another try
             _retry(config, claim, f"stopped: the database was busy ({exc.detail})")

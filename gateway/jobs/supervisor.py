@@ -4,23 +4,29 @@ from __future__ import annotations
 
 import logging
 import multiprocessing
+from collections.abc import Sequence
 
 from gateway.jobs import worker
+from gateway.jobs.events import Reaction
 from schemas.config import Config
 
 log = logging.getLogger("burnedge.worker")
 
 
 class Workers:
-    def __init__(self, config: Config):
+    def __init__(self, config: Config, reactions: Sequence[Reaction] = ()):
         self.config = config
+        self.reactions = tuple(reactions)
         self.context = multiprocessing.get_context("spawn")
         self.processes: list[multiprocessing.process.BaseProcess] = []
         self.stopped = False
 
     def _spawn(self, index: int):
         process = self.context.Process(
-            target=worker.main, args=(self.config, True), name=f"burnedge-worker-{index}", daemon=False
+            target=worker.main,
+            args=(self.config, True, False, self.reactions),
+            name=f"burnedge-worker-{index}",
+            daemon=False,
         )
         process.start()
         log.info("analysis worker %d started (pid %d)", index, process.pid)

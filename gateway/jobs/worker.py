@@ -17,9 +17,11 @@ import socket
 import threading
 import time
 import uuid
+from collections.abc import Sequence
 from pathlib import Path
 
 from gateway.jobs import folders
+from gateway.jobs.events import Reaction
 from gateway.jobs.queue import Claim, JobQueue
 from gateway.storage.database import Database
 from schemas.config import Config
@@ -48,8 +50,10 @@ def describe_exit(code: int | None) -> str:
 
 
 class Worker:
-    def __init__(self, config: Config, *, supervised: bool = False):
+    def __init__(self, config: Config, *, supervised: bool = False, reactions: Sequence[Reaction] = ()):
         self.config = config
+        self.reactions = tuple(reactions)
+        """What the jobs' processes publish a stored analysis to (gateway/jobs/events.py)."""
         self.db = Database.from_config(config.gateway)
         self.queue = JobQueue(self.db, config.jobs)
         self.owner = f"{socket.gethostname()}:{os.getpid()}:{uuid.uuid4().hex[:8]}"
@@ -85,7 +89,9 @@ class Worker:
         log.info("worker %s: analysis %s, try %d", self.owner, claim.job_id, claim.attempt)
         output = TryLog(folders.job_dir(self.config, claim.job_id) / "logs" / f"try-{claim.attempt}.log")
         child = self.context.Process(
-            target=_run_child, args=(self.config, claim, str(output.path)), name=f"analysis-{claim.job_id}"
+            target=_run_child,
+            args=(self.config, claim, str(output.path), self.reactions),
+            name=f"analysis-{claim.job_id}",
         )
         child.start()
         try:
@@ -166,7 +172,7 @@ def _quietly(action, fallback):
         return fallback
 
 
-def _run_child(config: Config, claim: Claim, log_path: str) -> None:
+def _run_child(config: Config, claim: Claim, log_path: str, reactions: Sequence[Reaction]) -> None:
     _redirect_output(log_path)
     # Imported here, in the job's own process: the analysis libraries (pycolmap, Open3D, onnxruntime) are never
     # loaded into the gateway or the worker, which stay small and cannot be crashed by them.
@@ -175,7 +181,7 @@ def _run_child(config: Config, claim: Claim, log_path: str) -> None:
     # After the imports: COLMAP's glog installs a crash handler of its own (the native stack); faulthandler prints
     # the Python stack that led into the crash, then hands the signal on to it.
     faulthandler.enable()
-    runner.child_main(config, claim)
+    runner.child_main(config, claim, reactions)
 
 
 class TryLog:
@@ -228,14 +234,14 @@ def _kill(child) -> None:
     child.join(timeout=10)
 
 
-def main(config: Config, supervised: bool = False, drain: bool = False) -> int:
+def main(config: Config, supervised: bool = False, drain: bool = False, reactions: Sequence[Reaction] = ()) -> int:
     """Process entry point: lower priority, stop cleanly on SIGTERM."""
     if config.jobs.log_file:
         _redirect_output(config.jobs.log_file)
     if supervised:
         logging.basicConfig(level=logging.INFO, format="%(asctime)s %(levelname)s %(name)s: %(message)s")
     os.nice(config.jobs.nice)
-    worker = Worker(config, supervised=supervised)
+    worker = Worker(config, supervised=supervised, reactions=reactions)
     signal.signal(signal.SIGTERM, lambda *_: worker.stopping.set())
     # Ctrl-C in the gateway's terminal reaches its workers too: the gateway stops them itself (SIGTERM); a worker on
     # its own treats Ctrl-C like SIGTERM and hands its job back.
