@@ -14,7 +14,7 @@ from harness.bodies import encounter_body, now, patient_body
 from processing.clinical.decision_inputs import Versioned
 from processing.fhir import codes, record, wound
 from processing.fhir.bundle import model_of
-from processing.report.inputs import AnalysisPage
+from processing.snapshot import AnalysisVisit
 from schemas.analysis import AnalysisResult, AnalysisStatus, BurnMetrics
 from schemas.clinical_results import InputRef
 from schemas.ids import uuid7
@@ -128,7 +128,7 @@ def test_who_may_export(client, auth, charted):
     assert _export(client, auth["clinician"], eid).status_code == 409  # withdrawn: nothing exported
 
 
-def _page(result) -> AnalysisPage:
+def _page(result) -> AnalysisVisit:
     value = BurnAnalysis(
         encounter_id=uuid7(),
         job_id=uuid7(),
@@ -138,7 +138,7 @@ def _page(result) -> AnalysisPage:
         completed_at="2026-11-13T05:09:00+00:00",
         result=result,
     )
-    return AnalysisPage(
+    return AnalysisVisit(
         Versioned(value, InputRef(kind="burn_analysis", id=value.job_id, version=1)), Path("."), "visit"
     )
 

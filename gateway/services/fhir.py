@@ -19,7 +19,7 @@ from base.storage.blobs import MediaStore
 from gateway.services.reports import REPORT_KINDS, ReportService
 from processing.fhir import bundle as fhir_bundle
 from processing.fhir.wound import Attached, attached
-from processing.report.inputs import AnalysisPage
+from processing.snapshot import AnalysisVisit
 from schemas.analysis import SegmentationRecord
 from schemas.capture import Asset
 from schemas.config import Config
@@ -57,7 +57,7 @@ class FhirService:
         self.reports = reports
         self.store = MediaStore(media_root(config))
 
-    def _analysis_files(self, conn: sqlite3.Connection, page: AnalysisPage) -> fhir_bundle.AnalysisFiles:
+    def _analysis_files(self, conn: sqlite3.Connection, page: AnalysisVisit) -> fhir_bundle.AnalysisFiles:
         value = page.analysis.value
         photos = []
         for asset_id in value.assets:

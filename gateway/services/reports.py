@@ -21,7 +21,8 @@ from base.storage import records as store
 from base.storage.durable import fsync_dir, replace_atomically
 from gateway.services import assessments, decision_support
 from processing.report.document import render
-from processing.report.inputs import REPORT_FORMAT, AnalysisPage, ReportInputs, versions_digest
+from processing.report.inputs import REPORT_FORMAT, versions_digest
+from processing.snapshot import AnalysisVisit, EncounterSnapshot
 from schemas.audit import AuditHead
 from schemas.base import utcnow
 from schemas.clinical_results import FluidPhase, FluidPlan
@@ -44,7 +45,7 @@ class MadeReport:
     """False when the stored report of the same versions was served."""
 
 
-def _visits(conn: sqlite3.Connection, config: Config, patient_id: str, encounter_id: str) -> list[AnalysisPage]:
+def _visits(conn: sqlite3.Connection, config: Config, patient_id: str, encounter_id: str) -> list[AnalysisVisit]:
     """Each of the patient's encounters' latest finished analysis, in the order the photos were taken."""
     pages = []
     for encounter in store.list_heads(conn, RecordKind.encounter, parent_id=patient_id, limit=None):
@@ -60,7 +61,7 @@ def _visits(conn: sqlite3.Connection, config: Config, patient_id: str, encounter
         day = value.result.hours_since_injury / 24 if value.result.hours_since_injury is not None else None
         here = "this encounter" if encounter.meta.id == encounter_id else "visit"
         label = f"{here}, photos {taken[:16].replace('T', ' ')}" + (f", day {day:.0f} after injury" if day else "")
-        pages.append(AnalysisPage(analysis, analysis_dir(config, value.job_id), label, day))
+        pages.append(AnalysisVisit(analysis, analysis_dir(config, value.job_id), label, day))
     return sorted(pages, key=lambda p: (p.day is None, p.day or 0.0, p.visit))
 
 
@@ -81,7 +82,7 @@ class ReportService:
         inputs = self.current(encounter_id, made_by or (principal.username if principal else "gateway"))
         return self.make_from(principal, inputs)
 
-    def current(self, encounter_id: str, made_by: str) -> ReportInputs:
+    def current(self, encounter_id: str, made_by: str) -> EncounterSnapshot:
         """Decision support brought up to date, then every record version the encounter's report reads, in one
         snapshot (a withdrawn encounter is a Conflict)."""
         with self.db.write() as conn:
@@ -92,7 +93,7 @@ class ReportService:
         with self.db.read() as conn:
             return self.snapshot(conn, encounter_id, utcnow(), made_by)
 
-    def make_from(self, principal: Principal | None, inputs: ReportInputs) -> MadeReport:
+    def make_from(self, principal: Principal | None, inputs: EncounterSnapshot) -> MadeReport:
         """The report of exactly this snapshot (the stored one when the same versions were reported before)."""
         encounter_id = inputs.encounter.value.id
         now = inputs.made_at
@@ -120,13 +121,15 @@ class ReportService:
             )
         return MadeReport(pdf, f'"{key}"', path, made=True)
 
-    def snapshot(self, conn: sqlite3.Connection, encounter_id: str, now: dt.datetime, made_by: str) -> ReportInputs:
+    def snapshot(
+        self, conn: sqlite3.Connection, encounter_id: str, now: dt.datetime, made_by: str
+    ) -> EncounterSnapshot:
         """Every record version a report (or the FHIR export) of the encounter is made from, read in one go."""
         gathered = decision_support.gather(conn, self.config, encounter_id, now)
         head = store.find_head(conn, RecordKind.decision_support, encounter_id)
         consultations = store.list_heads(conn, RecordKind.consultation, parent_id=encounter_id, limit=None)
         chain = audit.head(conn)
-        return ReportInputs(
+        return EncounterSnapshot(
             report_id=uuid7(),
             made_at=now,
             made_by=made_by,

@@ -13,7 +13,7 @@ from processing.fhir import codes, history, record, wound
 from processing.fhir.codes import concept
 from processing.fhir.record import iso, ref, resource_id
 from processing.fhir.wound import Attached
-from processing.report.inputs import ReportInputs
+from processing.snapshot import EncounterSnapshot
 from schemas.analysis import ModelSummary
 from schemas.errors import BurnedgeError
 
@@ -43,7 +43,7 @@ class BundleFiles:
     """The clinical report (PDF) made from the same record versions."""
 
 
-def _analysis_resources(inputs: ReportInputs, files: BundleFiles, subject: dict, enc: dict) -> list[dict]:
+def _analysis_resources(inputs: EncounterSnapshot, files: BundleFiles, subject: dict, enc: dict) -> list[dict]:
     out = []
     for page in inputs.analyses:
         job_id = page.analysis.value.job_id
@@ -60,7 +60,7 @@ def _analysis_resources(inputs: ReportInputs, files: BundleFiles, subject: dict,
     return out
 
 
-def _provenance(inputs: ReportInputs, files: BundleFiles, targets: list[dict]) -> dict:
+def _provenance(inputs: EncounterSnapshot, files: BundleFiles, targets: list[dict]) -> dict:
     agents = [
         {
             "type": concept((codes.PROVENANCE_AGENT, "assembler", "Assembler")),
@@ -96,7 +96,7 @@ def _provenance(inputs: ReportInputs, files: BundleFiles, targets: list[dict]) -
     return out
 
 
-def build(inputs: ReportInputs, files: BundleFiles) -> dict:
+def build(inputs: EncounterSnapshot, files: BundleFiles) -> dict:
     """The Bundle of the encounter in `inputs` and its patient's measured visits."""
     patient = record.patient(inputs.patient)
     subject = ref(patient)

@@ -16,7 +16,7 @@ from pathlib import Path
 from processing.fhir import codes
 from processing.fhir.codes import concept
 from processing.fhir.record import iso, quantity, ref, resource_id
-from processing.report.inputs import AnalysisPage
+from processing.snapshot import AnalysisVisit
 from schemas.analysis import AnalysisStatus, ModelSummary
 from schemas.segmentation import MaskSource
 
@@ -89,7 +89,7 @@ def document(file: Attached, kind: str, subject: dict, enc: dict, description: s
     }
 
 
-def mask_method(page: AnalysisPage, model: ModelSummary | None) -> str:
+def mask_method(page: AnalysisVisit, model: ModelSummary | None) -> str:
     views = page.analysis.value.result.views
     drawn = sum(v.source is not MaskSource.model for v in views)
     by_model = len(views) - drawn
@@ -102,7 +102,7 @@ def mask_method(page: AnalysisPage, model: ModelSummary | None) -> str:
     return "burn outline on the photos: " + ("; ".join(parts) or "none")
 
 
-def _confidence_note(page: AnalysisPage) -> str:
+def _confidence_note(page: AnalysisVisit) -> str:
     result = page.analysis.value.result
     conf = result.confidence
     if conf is None:
@@ -111,7 +111,7 @@ def _confidence_note(page: AnalysisPage) -> str:
     return f"Confidence {conf.level} ({conf.score:.2f} of 1): {reasons}."
 
 
-def wound_size(page: AnalysisPage, subject: dict, enc: dict, photos: list[dict], model: ModelSummary | None) -> dict:
+def wound_size(page: AnalysisVisit, subject: dict, enc: dict, photos: list[dict], model: ModelSummary | None) -> dict:
     """The WoundSize panel of one analysed burn: area, surface relief (as geometry) and volume in UCUM units,
     never a figure in cm without a metric scale."""
     value = page.analysis.value

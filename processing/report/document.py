@@ -14,11 +14,12 @@ from __future__ import annotations
 from pathlib import Path
 
 from processing.report import sections_advice, sections_analysis, sections_header, sections_record
-from processing.report.inputs import ReportInputs, versions_digest
+from processing.report.inputs import versions_digest
 from processing.report.layout import ReportPDF
+from processing.snapshot import EncounterSnapshot
 
 
-def missing_lines(r: ReportInputs) -> list[str]:
+def missing_lines(r: EncounterSnapshot) -> list[str]:
     lines = list(r.assessment.value.missing) if r.assessment else ["calculator results (nothing recorded yet)"]
     if r.assessment:
         lines += r.assessment.value.calculator_errors
@@ -27,7 +28,7 @@ def missing_lines(r: ReportInputs) -> list[str]:
     return lines
 
 
-def render(r: ReportInputs) -> bytes:
+def render(r: EncounterSnapshot) -> bytes:
     pdf = ReportPDF(r.report_id, versions_digest(r.refs()))
     pdf.set_title(f"Burn assessment report {r.report_id}")
     pdf.set_author(r.made_by)

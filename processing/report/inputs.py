@@ -1,70 +1,15 @@
-"""Everything one clinical report is made from: record versions read in one snapshot, and the analyses' files."""
+"""What is the report's own about its inputs: its layout version, and the digest of the record versions it is made
+from (the snapshot itself is processing/snapshot.py)."""
 
 from __future__ import annotations
 
-import datetime as dt
 import hashlib
 import json
-from dataclasses import dataclass, field
-from pathlib import Path
 
-from processing.clinical.decision_inputs import Versioned
-from schemas.audit import AuditHead
-from schemas.burn_chart import BurnChart
-from schemas.clinical_results import Assessment, FluidPlan, InputRef
-from schemas.decision_support import DecisionSupport
-from schemas.jobs import BurnAnalysis
-from schemas.longitudinal import TrackResult
-from schemas.patient import Encounter, Patient
-from schemas.record_parts import Intake, Mechanism, PrimarySurvey, Resuscitation, SecondarySurvey
-from schemas.transfer import Consultation
+from schemas.clinical_results import InputRef
 
 REPORT_FORMAT = "burnedge-report-2"
 """Changes when the report's layout changes, so a cached report of the old layout is made again."""
-
-
-@dataclass(frozen=True)
-class AnalysisPage:
-    """One measured visit as the report shows it."""
-
-    analysis: Versioned[BurnAnalysis]
-    folder: Path
-    """The analysis folder (analysis.json, surface/burn_surface.npz, segmentation/overlays/)."""
-    visit: str
-    """How the visit is named: "this encounter", or its date and day since injury."""
-    day: float | None = None
-
-
-@dataclass(frozen=True)
-class ReportInputs:
-    report_id: str
-    made_at: dt.datetime
-    made_by: str
-    software_version: str
-    clinic: str
-    patient: Versioned[Patient]
-    encounter: Versioned[Encounter]
-    intake: Versioned[Intake] | None = None
-    primary: Versioned[PrimarySurvey] | None = None
-    secondary: Versioned[SecondarySurvey] | None = None
-    mechanism: Versioned[Mechanism] | None = None
-    chart: Versioned[BurnChart] | None = None
-    resuscitation: Versioned[Resuscitation] | None = None
-    assessment: Versioned[Assessment] | None = None
-    fluids_now: FluidPlan | None = None
-    """The fluid plan recomputed at made_at: the rate to run now moves with the clock."""
-    decision_support: Versioned[DecisionSupport] | None = None
-    analyses: list[AnalysisPage] = field(default_factory=list)
-    track: TrackResult | None = None
-    consultations: list[Versioned[Consultation]] = field(default_factory=list)
-    audit_head: AuditHead | None = None
-    """The audit chain's newest entry before this report was made."""
-
-    def refs(self) -> list[InputRef]:
-        parts = [self.patient, self.encounter, self.intake, self.primary, self.secondary, self.mechanism, self.chart]
-        parts += [self.resuscitation, self.assessment, self.decision_support]
-        parts += [a.analysis for a in self.analyses] + list(self.consultations)
-        return [p.ref for p in parts if p is not None]
 
 
 def versions_digest(refs: list[InputRef]) -> str:

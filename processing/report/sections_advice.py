@@ -3,9 +3,9 @@
 from __future__ import annotations
 
 from processing.report.figures import clock
-from processing.report.inputs import ReportInputs
 from processing.report.layout import GREY, URGENT, ReportPDF
 from processing.report.record_text import urgent_first
+from processing.snapshot import EncounterSnapshot
 from schemas.decision_support import RecommendationState
 
 STATE_WORDS = {
@@ -15,7 +15,7 @@ STATE_WORDS = {
 }
 
 
-def decision_support(pdf: ReportPDF, r: ReportInputs) -> None:
+def decision_support(pdf: ReportPDF, r: EncounterSnapshot) -> None:
     pdf.heading("Decision support", new_page_if_below=90)
     record = r.decision_support
     if record is None:
@@ -49,7 +49,7 @@ def decision_support(pdf: ReportPDF, r: ReportInputs) -> None:
         pdf.bullets(support.missing, colour=GREY, size=8)
 
 
-def consultations(pdf: ReportPDF, r: ReportInputs) -> None:
+def consultations(pdf: ReportPDF, r: EncounterSnapshot) -> None:
     pdf.heading("Advice from the burn center", new_page_if_below=40)
     if not r.consultations:
         pdf.para("No advice received from a burn center for this encounter.", colour=GREY)

@@ -10,10 +10,10 @@ import cv2
 
 from processing.report.figures import DIGITS, figure, hours
 from processing.report.healing_series import healing_series
-from processing.report.inputs import AnalysisPage, ReportInputs
 from processing.report.layout import GREY, URGENT, ReportPDF
 from processing.report.plots import line_plot
 from processing.report.surface_render import render_surface
+from processing.snapshot import AnalysisVisit, EncounterSnapshot
 from schemas.analysis import DISCLAIMER, AnalysisStatus, ConfidenceRecord
 from schemas.errors import InvalidInput
 
@@ -23,7 +23,7 @@ SURFACE = Path("surface") / "burn_surface.npz"
 RELIEF_IS_GEOMETRY = "Surface relief is geometry measured from the photos, not the clinical burn depth."
 
 
-def analyses(pdf: ReportPDF, r: ReportInputs, scratch: Path) -> None:
+def analyses(pdf: ReportPDF, r: EncounterSnapshot, scratch: Path) -> None:
     if not r.analyses:
         pdf.heading("3D analysis")
         pdf.para("No 3D analysis of this patient's burn has finished: no measured area, relief or volume.", colour=GREY)
@@ -33,7 +33,7 @@ def analyses(pdf: ReportPDF, r: ReportInputs, scratch: Path) -> None:
         _analysis(pdf, page, scratch)
 
 
-def _analysis(pdf: ReportPDF, page: AnalysisPage, scratch: Path) -> None:
+def _analysis(pdf: ReportPDF, page: AnalysisVisit, scratch: Path) -> None:
     record = page.analysis.value
     result = record.result
     pdf.heading(f"3D analysis — {page.visit}", new_page_if_below=0)
@@ -164,7 +164,7 @@ def _two_views(overlays: list[Path]) -> list[Path]:
     return [overlays[0], overlays[len(overlays) // 2]]
 
 
-def healing(pdf: ReportPDF, r: ReportInputs) -> None:
+def healing(pdf: ReportPDF, r: EncounterSnapshot) -> None:
     track = r.track
     if track is None or not track.sessions:
         pdf.heading("Healing over time")

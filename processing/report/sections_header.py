@@ -6,13 +6,13 @@ from __future__ import annotations
 
 from processing.report.figures import clock, figure
 from processing.report.history_text import allergy_lines, history_facts, medication_lines, tetanus_lines
-from processing.report.inputs import ReportInputs
 from processing.report.layout import GREY, NOT_RECORDED, URGENT, ReportPDF
 from processing.report.record_text import words
+from processing.snapshot import EncounterSnapshot
 from schemas.clinical_results import FluidPhase
 
 
-def header(pdf: ReportPDF, r: ReportInputs, missing: list[str]) -> None:
+def header(pdf: ReportPDF, r: EncounterSnapshot, missing: list[str]) -> None:
     p, e = r.patient.value, r.encounter.value
     pdf.doc_title("Burn assessment report")
     pdf.para("Decision support only — every figure and recommendation is confirmed by a clinician.", bold=True)
@@ -51,7 +51,7 @@ def header(pdf: ReportPDF, r: ReportInputs, missing: list[str]) -> None:
         pdf.bullets(missing, colour=GREY)
 
 
-def at_a_glance(pdf: ReportPDF, r: ReportInputs) -> None:
+def at_a_glance(pdf: ReportPDF, r: EncounterSnapshot) -> None:
     """The figures a reader looks for first, each with where it is detailed."""
     pdf.heading("At a glance")
     a = r.assessment.value if r.assessment else None
@@ -103,7 +103,7 @@ def at_a_glance(pdf: ReportPDF, r: ReportInputs) -> None:
                 pdf.para(f"URGENT, pending: {rec.text}", colour=URGENT, size=8.5)
 
 
-def history(pdf: ReportPDF, r: ReportInputs) -> None:
+def history(pdf: ReportPDF, r: EncounterSnapshot) -> None:
     pdf.heading("History: allergies, medications, tetanus", new_page_if_below=45)
     intake = r.intake.value if r.intake else None
     if intake is None:

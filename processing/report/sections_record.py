@@ -4,9 +4,9 @@ from __future__ import annotations
 
 from processing.report.body_diagram import draw_body_chart
 from processing.report.figures import clock, figure
-from processing.report.inputs import ReportInputs
 from processing.report.layout import GREY, URGENT, ReportPDF
 from processing.report.record_text import mechanism_text, primary_facts, secondary_lines, words
+from processing.snapshot import EncounterSnapshot
 from schemas.burn_chart import BurnDepth
 from schemas.clinical_results import FluidPhase
 
@@ -19,7 +19,7 @@ DEPTH_LABEL = {
 }
 
 
-def surveys(pdf: ReportPDF, r: ReportInputs) -> None:
+def surveys(pdf: ReportPDF, r: EncounterSnapshot) -> None:
     pdf.heading("Primary survey (ABCDE)")
     if r.primary is None:
         pdf.para("No primary survey recorded.", colour=GREY)
@@ -40,7 +40,7 @@ def surveys(pdf: ReportPDF, r: ReportInputs) -> None:
             pdf.para(r.mechanism.value.description)
 
 
-def burn_chart(pdf: ReportPDF, r: ReportInputs) -> None:
+def burn_chart(pdf: ReportPDF, r: EncounterSnapshot) -> None:
     pdf.heading("Burn chart and %TBSA", new_page_if_below=110)
     if r.chart is None:
         pdf.para(
@@ -84,7 +84,7 @@ def burn_chart(pdf: ReportPDF, r: ReportInputs) -> None:
         pdf.para(f"Special area: {words(area.area)} ({DEPTH_LABEL[area.depth]})")
 
 
-def fluids(pdf: ReportPDF, r: ReportInputs) -> None:
+def fluids(pdf: ReportPDF, r: EncounterSnapshot) -> None:
     pdf.heading("Fluids", new_page_if_below=50)
     plan = r.fluids_now
     if plan is None:
@@ -134,7 +134,7 @@ def fluids(pdf: ReportPDF, r: ReportInputs) -> None:
     pdf.bullets(plan.warnings, colour=GREY)
 
 
-def referral(pdf: ReportPDF, r: ReportInputs) -> None:
+def referral(pdf: ReportPDF, r: EncounterSnapshot) -> None:
     pdf.heading("Referral to a burn center", new_page_if_below=40)
     result = r.assessment.value.referral if r.assessment else None
     if result is None:
