@@ -21,20 +21,21 @@ from base.web.pages.rendering import NAV_KEY, SITE_NAME_KEY, template_config
 from gateway.controllers.analyses import AnalysisController
 from gateway.controllers.assets import AssetController
 from gateway.controllers.decision_support import DecisionSupportController
-from gateway.controllers.fhir import FhirController
 from gateway.controllers.model import ModelController
 from gateway.controllers.parts import PART_CONTROLLERS
 from gateway.controllers.records import EncounterController, PatientController
-from gateway.controllers.reports import ReportController
 from gateway.controllers.sync import SyncController
-from gateway.controllers.transfers import TransferController
 from gateway.controllers.uploads import UploadController
 from gateway.dependencies import Services, provide_services
+from gateway.documents.fhir_controller import FhirController
+from gateway.documents.report_controller import ReportController
 from gateway.jobs.supervisor import Workers
 from gateway.pages import NAV, SITE_NAME, TEMPLATES, page_controllers
 from gateway.scheduler import start_scheduler
 from gateway.services.reactions import ANALYSIS_STORED
 from gateway.storage.database import Database
+from gateway.transfers.controller import TransferController
+from gateway.wounds.controller import PatientWoundsController, WoundController
 from schemas.config import Config
 
 
@@ -52,6 +53,8 @@ def create_app(config: Config, *, start_workers: bool = False) -> Litestar:
             AdminController,
             PatientController,
             EncounterController,
+            PatientWoundsController,
+            WoundController,
             *PART_CONTROLLERS,
             DecisionSupportController,
             ReportController,

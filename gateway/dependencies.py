@@ -13,19 +13,21 @@ from base.accounts.permissions import Principal
 from base.accounts.service import AccountService
 from base.folders import media_root
 from base.storage.blobs import MediaStore
+from gateway.documents.fhir import FhirService
+from gateway.documents.reports import ReportService
 from gateway.services import audit_trail
 from gateway.services.analyses import AnalysisService
 from gateway.services.assets import AssetService
 from gateway.services.decision_support import DecisionSupportService
-from gateway.services.fhir import FhirService
 from gateway.services.frames import FrameService
 from gateway.services.phone_sync import PhoneSync
 from gateway.services.records import RecordService
-from gateway.services.reports import ReportService
 from gateway.services.thumbnails import ThumbnailService
-from gateway.services.transfers import TransferService
 from gateway.services.uploads import UploadService
 from gateway.storage.database import Database
+from gateway.transfers.service import TransferService
+from gateway.wounds import CHECKS as WOUND_CHECKS
+from gateway.wounds.service import WoundService
 from schemas.audit import AuditVerification
 from schemas.config import Config
 
@@ -46,6 +48,7 @@ class Services:
     reports: ReportService
     fhir: FhirService
     thumbnails: ThumbnailService
+    wounds: WoundService
     run_sync_now: Callable[[], None] = lambda: None
     """Starts a sync round at once (set by the scheduler when [sync] enabled)."""
 
@@ -54,7 +57,7 @@ class Services:
 
     @classmethod
     def build(cls, config: Config, db: Database) -> Services:
-        records = RecordService(db, config)
+        records = RecordService(db, config, WOUND_CHECKS)
         reports = ReportService(db, config)
         store = MediaStore(media_root(config))
         assets = AssetService(db, config, store)
@@ -73,6 +76,7 @@ class Services:
             reports=reports,
             fhir=FhirService(db, config, reports),
             thumbnails=ThumbnailService(config, assets),
+            wounds=WoundService(records),
         )
 
 

@@ -8,6 +8,7 @@ appends the audit entry, all in one transaction: a rejected write stores nothing
 from __future__ import annotations
 
 import sqlite3
+from collections.abc import Callable, Mapping
 
 import msgspec
 
@@ -27,9 +28,17 @@ from gateway.storage.database import Database
 from schemas.base import iso
 from schemas.config import Config
 from schemas.errors import Conflict, InvalidInput, VersionMismatch
-from schemas.records import ENCOUNTER_PARTS, EncounterRecord, Record, RecordKind
+from schemas.records import ENCOUNTER_PARTS, PATIENT_RECORDS, EncounterRecord, Record, RecordKind
 
 _encode = msgspec.json.encode
+RESULT_INPUTS = ENCOUNTER_PARTS | {RecordKind.patient, RecordKind.encounter}
+"""Kinds whose writes change an encounter's calculator results."""
+
+RecordCheck = Callable[[sqlite3.Connection, str, msgspec.Struct, Config], tuple[msgspec.Struct, str | None]]
+"""A domain package's checks of its kind before a write (gateway/wounds/rules.py): given the connection, the record's
+id and its validated struct, the struct to store (defaults filled in) and its parent's id; raises InvalidInput or
+NotFound when it cannot be stored. The composition root hands them in, so the record service never imports a domain
+package."""
 
 
 class WriteOutcome(msgspec.Struct, frozen=True):
@@ -40,9 +49,11 @@ class WriteOutcome(msgspec.Struct, frozen=True):
 
 
 class RecordService:
-    def __init__(self, db: Database, config: Config):
+    def __init__(self, db: Database, config: Config, checks: Mapping[RecordKind, RecordCheck] | None = None):
         self.db = db
         self.config = config
+        self.checks = dict(checks or {})
+        """The domain packages' checks, by the kind they keep (gateway.dependencies.Services.build hands them in)."""
 
     # reads -----------------------------------------------------------------
     def get(self, principal: Principal, kind: RecordKind, record_id: str) -> Record:
@@ -109,8 +120,7 @@ class RecordService:
         self, conn: sqlite3.Connection, principal: Principal, kind: RecordKind, record_id: str, data: object
     ) -> WriteOutcome:
         require_write(principal, kind)
-        struct = validation.to_struct(kind, data)
-        parent_id = validation.check(conn, kind, record_id, struct, self.config)
+        struct, parent_id = self._checked(conn, kind, record_id, data)
         check_field_rules(principal, kind, struct, None)
         data_json = _encode(struct)
         current = store.find_head(conn, kind, record_id)
@@ -139,8 +149,7 @@ class RecordService:
     ) -> WriteOutcome:
         """Update to a new version; on a withdrawn record, If-Match of the withdrawn version restores it."""
         require_write(principal, kind)
-        struct = validation.to_struct(kind, data)
-        parent_id = validation.check(conn, kind, record_id, struct, self.config)
+        struct, parent_id = self._checked(conn, kind, record_id, data)
         data_json = _encode(struct)
         current = store.get_head(conn, kind, record_id)
         check_field_rules(principal, kind, struct, current)
@@ -205,6 +214,16 @@ class RecordService:
             self._refresh_results(conn, principal, kind, record_id)
         return WriteOutcome(record)
 
+    def _checked(
+        self, conn: sqlite3.Connection, kind: RecordKind, record_id: str, data: object
+    ) -> tuple[msgspec.Struct, str | None]:
+        """The struct to store and its parent's id, once the record passed its checks."""
+        struct = validation.to_struct(kind, data)
+        check = self.checks.get(kind)
+        if check is not None:
+            return check(conn, record_id, struct, self.config)
+        return struct, validation.check(conn, kind, record_id, struct, self.config)
+
     def _write_version(
         self,
         conn,
@@ -249,6 +268,8 @@ class RecordService:
 
     def _refresh_results(self, conn, principal: Principal, kind: RecordKind, record_id: str) -> None:
         """Recompute the calculator results that depend on what was written."""
+        if kind not in RESULT_INPUTS:
+            return
         if kind is RecordKind.patient:
             encounters = [
                 r.meta.id for r in store.list_heads(conn, RecordKind.encounter, parent_id=record_id, limit=None)
@@ -264,7 +285,7 @@ def _same_content(current: Record, data_json: bytes) -> bool:
 
 
 def _parent_of(record: Record) -> str | None:
-    if record.meta.kind is RecordKind.encounter:
+    if record.meta.kind in PATIENT_RECORDS:
         return record.data.get("patient_id")
     if record.meta.kind is RecordKind.patient:
         return None

@@ -19,7 +19,7 @@ from schemas.errors import InvalidInput, NotFound
 from schemas.patient import Encounter, Patient
 from schemas.problem import FieldProblem
 from schemas.record_parts import Intake, PrimarySurvey, Resuscitation, SecondarySurvey
-from schemas.records import RECORD_TYPES, Record, RecordKind
+from schemas.records import ENCOUNTER_PARTS, PATIENT_RECORDS, RECORD_TYPES, Record, RecordKind
 
 _AT_PATH = re.compile(r"^(?P<msg>.*?)(?: - at `(?P<path>[^`]*)`)?$", re.S)
 
@@ -43,14 +43,14 @@ def to_struct(kind: RecordKind, data: object) -> msgspec.Struct:
         raise InvalidInput(f"{kind.value}: {problem.message} at {problem.field}", errors=[problem]) from exc
 
 
-def _bad(field: str, message: str) -> InvalidInput:
+def bad_field(field: str, message: str) -> InvalidInput:
     return InvalidInput(f"{message} ({field})", errors=[FieldProblem(field=field, message=message)])
 
 
-def _not_future(value: dt.datetime | None, field: str, config: Config) -> None:
+def not_future(value: dt.datetime | None, field: str, config: Config) -> None:
     now = utcnow()
     if value is not None and value > now + dt.timedelta(seconds=config.gateway.clock_skew_s):
-        raise _bad(field, future_message(value, now, config))
+        raise bad_field(field, future_message(value, now, config))
 
 
 def future_message(value: dt.datetime, now: dt.datetime, config: Config) -> str:
@@ -79,14 +79,17 @@ def check(conn: sqlite3.Connection, kind: RecordKind, record_id: str, struct, co
     if kind is RecordKind.encounter:
         _check_encounter(conn, record_id, struct, config)
         return struct.patient_id
+    if kind not in ENCOUNTER_PARTS:
+        # A domain package's kind (a wound) is checked by the rules it hands the record service.
+        raise InvalidInput(f"this gateway has no checks for {kind.label} records: they cannot be stored")
     if struct.encounter_id != record_id:
-        raise _bad(
+        raise bad_field(
             "$.encounter_id",
             f"encounter_id {struct.encounter_id} does not match the encounter {record_id} in the address",
         )
     require_live_encounter(conn, record_id)
     if isinstance(struct, (PrimarySurvey, SecondarySurvey, BurnChart)):
-        _not_future(struct.assessed_at, "$.assessed_at", config)
+        not_future(struct.assessed_at, "$.assessed_at", config)
     if isinstance(struct, BurnChart):
         validate_chart(struct)
     if isinstance(struct, Intake):
@@ -94,24 +97,24 @@ def check(conn: sqlite3.Connection, kind: RecordKind, record_id: str, struct, co
     if isinstance(struct, Resuscitation):
         validate_resuscitation(struct)
         for i, given in enumerate(struct.fluid_given):
-            _not_future(given.given_at, f"$.fluid_given[{i}].given_at", config)
+            not_future(given.given_at, f"$.fluid_given[{i}].given_at", config)
     return record_id
 
 
 def _check_patient(record_id: str, patient: Patient) -> None:
     if patient.id != record_id:
-        raise _bad("$.id", f"id {patient.id} does not match {record_id} in the address")
+        raise bad_field("$.id", f"id {patient.id} does not match {record_id} in the address")
     # The gateway's UTC date can be a day behind the bedside's local date.
     if patient.date_of_birth is not None and patient.date_of_birth > utcnow().date() + dt.timedelta(days=1):
-        raise _bad("$.date_of_birth", "date of birth is in the future")
+        raise bad_field("$.date_of_birth", "date of birth is in the future")
 
 
 def _check_intake(intake: Intake) -> None:
     last = intake.last_tetanus_dose
     if last is not None and last > utcnow().date() + dt.timedelta(days=1):
-        raise _bad("$.last_tetanus_dose", "the last tetanus dose is dated in the future")
+        raise bad_field("$.last_tetanus_dose", "the last tetanus dose is dated in the future")
     if last is not None and intake.years_since_last_tetanus_dose is not None:
-        raise _bad(
+        raise bad_field(
             "$.years_since_last_tetanus_dose",
             "give the date of the last tetanus dose or the years since it, not both",
         )
@@ -119,15 +122,15 @@ def _check_intake(intake: Intake) -> None:
 
 def _check_encounter(conn: sqlite3.Connection, record_id: str, enc: Encounter, config: Config) -> None:
     if enc.id != record_id:
-        raise _bad("$.id", f"id {enc.id} does not match {record_id} in the address")
-    _require_live(conn, RecordKind.patient, enc.patient_id)
-    _not_future(enc.time_of_arrival, "$.time_of_arrival", config)
-    _not_future(enc.time_of_injury, "$.time_of_injury", config)
+        raise bad_field("$.id", f"id {enc.id} does not match {record_id} in the address")
+    require_live(conn, RecordKind.patient, enc.patient_id)
+    not_future(enc.time_of_arrival, "$.time_of_arrival", config)
+    not_future(enc.time_of_injury, "$.time_of_injury", config)
     if enc.time_of_injury is not None and enc.time_of_injury > enc.time_of_arrival:
-        raise _bad("$.time_of_injury", "the time of injury is after the time of arrival")
+        raise bad_field("$.time_of_injury", "the time of injury is after the time of arrival")
 
 
-def _require_live(conn: sqlite3.Connection, kind: RecordKind, record_id: str) -> Record:
+def require_live(conn: sqlite3.Connection, kind: RecordKind, record_id: str) -> Record:
     head = store.find_head(conn, kind, record_id)
     if head is None:
         raise NotFound(f"no {kind.label} with id {record_id}: create it first")
@@ -138,12 +141,17 @@ def _require_live(conn: sqlite3.Connection, kind: RecordKind, record_id: str) ->
 
 def require_live_encounter(conn: sqlite3.Connection, encounter_id: str) -> Record:
     """The encounter, if it and its patient exist and are not withdrawn."""
-    encounter = _require_live(conn, RecordKind.encounter, encounter_id)
-    _require_live(conn, RecordKind.patient, encounter.data["patient_id"])
+    encounter = require_live(conn, RecordKind.encounter, encounter_id)
+    require_live(conn, RecordKind.patient, encounter.data["patient_id"])
     return encounter
 
 
 def check_unchanged_links(kind: RecordKind, struct, current: Record) -> None:
     """An update may not move a record to another patient or encounter."""
-    if kind is RecordKind.encounter and struct.patient_id != current.data["patient_id"]:
-        raise _bad("$.patient_id", "an encounter cannot move to another patient: withdraw it and open a new one")
+    if kind in PATIENT_RECORDS and struct.patient_id != current.data["patient_id"]:
+        again = "open a new one" if kind is RecordKind.encounter else "record a new one"
+        raise bad_field("$.patient_id", f"{_article(kind)} cannot move to another patient: withdraw it and {again}")
+
+
+def _article(kind: RecordKind) -> str:
+    return f"{'an' if kind.label[0] in 'aeiou' else 'a'} {kind.label}"

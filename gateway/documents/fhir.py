@@ -16,7 +16,7 @@ from base.folders import analysis_dir, media_root
 from base.storage import assets as asset_store
 from base.storage import audit
 from base.storage.blobs import MediaStore
-from gateway.services.reports import REPORT_KINDS, ReportService
+from gateway.documents.reports import REPORT_KINDS, ReportService
 from processing.fhir import bundle as fhir_bundle
 from processing.fhir.wound import Attached, attached
 from processing.snapshot import AnalysisVisit

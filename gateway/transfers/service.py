@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from base.accounts.permissions import Principal, require_read
 from base.storage import records as store
-from gateway.services.reports import ReportService
+from gateway.documents.reports import ReportService
 from gateway.storage.database import Database
 from schemas.accounts import Role
 from schemas.config import Config
