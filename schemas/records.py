@@ -14,6 +14,7 @@ from schemas.jobs import BurnAnalysis
 from schemas.patient import Encounter, Patient
 from schemas.record_parts import Intake, Mechanism, PrimarySurvey, Resuscitation, SecondarySurvey
 from schemas.transfer import Consultation
+from schemas.wound import Wound
 
 
 class RecordKind(enum.StrEnum):
@@ -34,6 +35,8 @@ class RecordKind(enum.StrEnum):
     decision_support = "decision_support"
     """Recommendations computed from the record, each pending, accepted or declined by a clinician; written by the
     gateway only (a clinician's act through POST .../decision-support/acts)."""
+    wound = "wound"
+    """One burn of a patient, tracked across encounters until it closes (gateway/wounds/)."""
 
     @property
     def label(self) -> str:
@@ -54,7 +57,11 @@ RECORD_TYPES: dict[RecordKind, type[msgspec.Struct]] = {
     RecordKind.burn_analysis: BurnAnalysis,
     RecordKind.consultation: Consultation,
     RecordKind.decision_support: DecisionSupport,
+    RecordKind.wound: Wound,
 }
+
+PATIENT_RECORDS = frozenset({RecordKind.encounter, RecordKind.wound})
+"""Records of a patient: their parent is the patient their `patient_id` names, fixed once they are created."""
 
 # Encounter parts are one per encounter: their record id is the encounter's id.
 ENCOUNTER_PARTS = frozenset(

@@ -1,0 +1,51 @@
+"""A patient's wounds: create, list, read, update with If-Match, withdraw, history.
+
+Wounds are versioned records of their own kind (`wound`, parent the patient), so the record service stores them:
+every write is one transaction with its audit entry, checked by gateway/wounds/rules.py. This service adds what a
+wound's addresses need: a wound is created and listed under its patient.
+"""
+
+from __future__ import annotations
+
+from base.accounts.permissions import Principal, require_write
+from gateway.services.records import RecordService, WriteOutcome
+from gateway.services.validation import bad_field
+from schemas.records import Record, RecordKind
+from schemas.wound import Wound
+
+KIND = RecordKind.wound
+
+
+class WoundService:
+    def __init__(self, records: RecordService):
+        self.records = records
+
+    def create(self, principal: Principal, patient_id: str, wound: Wound) -> WriteOutcome:
+        """Create a wound of the patient in the address (the client made its id; retrying is safe)."""
+        require_write(principal, KIND)
+        if wound.patient_id != patient_id:
+            raise bad_field(
+                "$.patient_id", f"patient_id {wound.patient_id} does not match the patient {patient_id} in the address"
+            )
+        return self.records.create(principal, KIND, wound.id, wound)
+
+    def of_patient(self, principal: Principal, patient_id: str, *, include_deleted: bool = False) -> list[Record]:
+        """The patient's wounds, oldest first; withdrawn ones only when asked for. 404 for an unknown patient."""
+        self.records.get(principal, RecordKind.patient, patient_id)
+        return self.records.list_records(
+            principal, KIND, parent_id=patient_id, include_deleted=include_deleted, limit=None
+        )
+
+    def get(self, principal: Principal, wound_id: str) -> Record:
+        return self.records.get(principal, KIND, wound_id)
+
+    def history(self, principal: Principal, wound_id: str) -> list[Record]:
+        return self.records.history(principal, KIND, wound_id)
+
+    def update(self, principal: Principal, wound_id: str, wound: Wound, if_match: int) -> WriteOutcome:
+        """The next version; If-Match of a withdrawn version restores the wound."""
+        return self.records.update(principal, KIND, wound_id, wound, if_match)
+
+    def withdraw(self, principal: Principal, wound_id: str, if_match: int, reason: str) -> WriteOutcome:
+        """A withdrawn version with its reason; history keeps every version."""
+        return self.records.delete(principal, KIND, wound_id, if_match, reason)
