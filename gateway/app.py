@@ -18,14 +18,14 @@ from base.web.pages.assets import static_files
 from base.web.pages.clinic_time import CLOCK_KEY, ClinicClock
 from base.web.pages.protection import csrf_protection, security_headers
 from base.web.pages.rendering import NAV_KEY, SITE_NAME_KEY, template_config
-from gateway.controllers.analyses import AnalysisController
-from gateway.controllers.assets import AssetController
+from gateway.analyses.controller import AnalysisController
+from gateway.analyses.model_controller import ModelController
+from gateway.capture.asset_controller import AssetController
+from gateway.capture.upload_controller import UploadController
 from gateway.controllers.decision_support import DecisionSupportController
-from gateway.controllers.model import ModelController
 from gateway.controllers.parts import PART_CONTROLLERS
 from gateway.controllers.records import EncounterController, PatientController
 from gateway.controllers.sync import SyncController
-from gateway.controllers.uploads import UploadController
 from gateway.dependencies import Services, provide_services
 from gateway.documents.fhir_controller import FhirController
 from gateway.documents.report_controller import ReportController

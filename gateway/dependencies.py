@@ -13,17 +13,17 @@ from base.accounts.permissions import Principal
 from base.accounts.service import AccountService
 from base.folders import media_root
 from base.storage.blobs import MediaStore
+from gateway.analyses.service import AnalysisService
+from gateway.capture.assets import AssetService
+from gateway.capture.frames import FrameService
+from gateway.capture.thumbnails import ThumbnailService
+from gateway.capture.uploads import UploadService
 from gateway.documents.fhir import FhirService
 from gateway.documents.reports import ReportService
 from gateway.services import audit_trail
-from gateway.services.analyses import AnalysisService
-from gateway.services.assets import AssetService
 from gateway.services.decision_support import DecisionSupportService
-from gateway.services.frames import FrameService
 from gateway.services.phone_sync import PhoneSync
 from gateway.services.records import RecordService
-from gateway.services.thumbnails import ThumbnailService
-from gateway.services.uploads import UploadService
 from gateway.storage.database import Database
 from gateway.transfers.service import TransferService
 from gateway.wounds import CHECKS as WOUND_CHECKS

@@ -170,7 +170,7 @@ class StoredJob(Frozen):
     encounter_id: str
     patient_id: str
     input_digest: str
-    """What makes two requests the same analysis (gateway/services/analyses.py)."""
+    """What makes two requests the same analysis (gateway/analyses/service.py)."""
     state: JobState
     priority: int
     max_attempts: int

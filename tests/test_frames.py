@@ -15,7 +15,7 @@ import cv2
 import numpy as np
 import pytest
 
-import gateway.services.frames as frames_service
+import gateway.capture.frames as frames_service
 from base.storage import assets as asset_rows
 from base.storage import audit, blobs
 from base.storage.blobs import MediaStore

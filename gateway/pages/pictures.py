@@ -17,10 +17,10 @@ from litestar.response import File, Redirect, Template
 from base.web.pages.rendering import page
 from base.web.paths import IdPath
 from base.web.site import AuthedRequest
+from gateway.capture.uploads import check_filename
 from gateway.dependencies import ServicesDep
 from gateway.pages.encounter_view import encounter_header
 from gateway.scheduler import run_frames_now
-from gateway.services.uploads import check_filename
 from schemas.capture import Asset, AssetKind
 from schemas.errors import BurnedgeError, InvalidInput
 from schemas.ids import uuid7

@@ -26,9 +26,9 @@ from litestar.params import HeaderParameter
 from base.web.paths import IdPath
 from base.web.problems import ONE, problems
 from base.web.site import AuthedRequest
+from gateway.capture.uploads import UploadState
 from gateway.dependencies import ServicesDep
 from gateway.scheduler import run_frames_now
-from gateway.services.uploads import UploadState
 from schemas.capture import TUS_VERSION, AssetKind, UploadStatus
 from schemas.errors import (
     BadRequest,

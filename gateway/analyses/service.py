@@ -17,10 +17,10 @@ from base.accounts.permissions import Principal, require_capture, require_read
 from base.storage import assets as asset_rows
 from base.storage import audit
 from base.storage import records as store
+from gateway.capture.assets import AssetService
 from gateway.jobs import folders, timeline
 from gateway.jobs.capture_time import capture_time
 from gateway.jobs.queue import JobQueue
-from gateway.services.assets import AssetService
 from gateway.services.validation import require_live_encounter
 from gateway.storage.database import Database
 from processing.stages import code_digest

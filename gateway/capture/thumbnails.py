@@ -12,7 +12,7 @@ import numpy as np
 
 from base.accounts.permissions import Principal
 from base.folders import media_root
-from gateway.services.assets import AssetService
+from gateway.capture.assets import AssetService
 from schemas.config import Config
 from schemas.errors import NotFound
 

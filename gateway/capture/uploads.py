@@ -22,7 +22,7 @@ from pathlib import Path
 from base.accounts.permissions import Principal, require_capture
 from base.storage import accounts as account_rows
 from base.storage.blobs import MediaStore
-from gateway.services.assets import AssetService
+from gateway.capture.assets import AssetService
 from gateway.services.validation import require_live_encounter
 from gateway.storage import uploads as upload_rows
 from gateway.storage.database import Database
