@@ -89,7 +89,7 @@ def _size(text: str) -> tuple[int, int]:
 
 def cmd_worker(args: argparse.Namespace) -> int:
     from gateway.jobs.worker import main as worker_main
-    from gateway.services.reactions import ANALYSIS_STORED
+    from gateway.reactions import ANALYSIS_STORED
     from gateway.storage.database import Database
 
     config = _config(args)
@@ -104,7 +104,7 @@ def cmd_worker(args: argparse.Namespace) -> int:
 
 
 def cmd_audit_verify(args: argparse.Namespace) -> int:
-    from gateway.services.audit_trail import verify
+    from gateway.records.audit_trail import verify
     from gateway.storage.database import Database
 
     config = _config(args)

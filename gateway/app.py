@@ -22,17 +22,17 @@ from gateway.analyses.controller import AnalysisController
 from gateway.analyses.model_controller import ModelController
 from gateway.capture.asset_controller import AssetController
 from gateway.capture.upload_controller import UploadController
-from gateway.controllers.decision_support import DecisionSupportController
-from gateway.controllers.parts import PART_CONTROLLERS
-from gateway.controllers.records import EncounterController, PatientController
-from gateway.controllers.sync import SyncController
 from gateway.dependencies import Services, provide_services
 from gateway.documents.fhir_controller import FhirController
 from gateway.documents.report_controller import ReportController
 from gateway.jobs.supervisor import Workers
 from gateway.pages import NAV, SITE_NAME, TEMPLATES, page_controllers
+from gateway.phones.controller import SyncController
+from gateway.reactions import ANALYSIS_STORED
+from gateway.records.controller import EncounterController, PatientController
+from gateway.records.decision_support_controller import DecisionSupportController
+from gateway.records.parts_controller import PART_CONTROLLERS
 from gateway.scheduler import start_scheduler
-from gateway.services.reactions import ANALYSIS_STORED
 from gateway.storage.database import Database
 from gateway.transfers.controller import TransferController
 from gateway.wounds.controller import PatientWoundsController, WoundController

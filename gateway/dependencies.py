@@ -20,10 +20,10 @@ from gateway.capture.thumbnails import ThumbnailService
 from gateway.capture.uploads import UploadService
 from gateway.documents.fhir import FhirService
 from gateway.documents.reports import ReportService
-from gateway.services import audit_trail
-from gateway.services.decision_support import DecisionSupportService
-from gateway.services.phone_sync import PhoneSync
-from gateway.services.records import RecordService
+from gateway.phones.sync import PhoneSync
+from gateway.records import audit_trail
+from gateway.records.decision_support import DecisionSupportService
+from gateway.records.service import RecordService
 from gateway.storage.database import Database
 from gateway.transfers.service import TransferService
 from gateway.wounds import CHECKS as WOUND_CHECKS

@@ -21,7 +21,7 @@ from pathlib import Path
 
 from base.accounts.permissions import Principal
 from base.folders import keys_dir
-from gateway.services.records import RecordService
+from gateway.records.service import RecordService
 from gateway.storage.database import Database
 from harness.bodies import encounter_body, patient_body
 from schemas.accounts import Role

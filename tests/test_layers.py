@@ -2,7 +2,7 @@
 
 An AST walk over every module (imports inside functions included) finds each import of a project module; a module
 may import its own layer or those below, never one above, never a sibling server, and no circle of modules, nor of
-sibling packages (gateway.jobs and gateway.services, say), may form. A second test loads the burn center's app in a fresh interpreter and checks it pulls in no gateway code and no
+sibling packages (gateway.jobs and gateway.records, say), may form. A second test loads the burn center's app in a fresh interpreter and checks it pulls in no gateway code and no
 OpenCV.
 """
 
@@ -128,8 +128,8 @@ def package_of(module: str, modules: dict[str, Path]) -> str:
 
 def package_graph(graph: dict[str, set[str]], modules: dict[str, Path]) -> dict[str, set[str]]:
     """Package -> the packages its modules import, leaving out a package's own ancestors and descendants: a package
-    uses what contains it (gateway.controllers reads gateway.dependencies) and composes what it contains (gateway.app
-    wires gateway.controllers); siblings, and their descendants, must not import each other both ways."""
+    uses what contains it (gateway.records reads gateway.dependencies) and composes what it contains (gateway.app
+    wires gateway.records); siblings, and their descendants, must not import each other both ways."""
     packages: dict[str, set[str]] = {}
     for source, targets in graph.items():
         src = package_of(source, modules)

@@ -17,7 +17,7 @@ from litestar.testing import TestClient
 from base.web.pages.clinic_time import ClinicClock, offset_text
 from base.web.pages.forms import form_fields, parse_form
 from gateway.app import create_app
-from gateway.services.validation import future_message
+from gateway.records.validation import future_message
 from schemas.accounts import Role
 from schemas.config import Config, GatewayConfig, load_config
 from schemas.errors import InvalidInput

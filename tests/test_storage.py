@@ -116,7 +116,7 @@ def test_a_threads_connection_is_closed_when_the_thread_ends(tmp_path):
 
 
 def _create_patients(db_path: str, count: int) -> None:
-    from gateway.services.records import RecordService
+    from gateway.records.service import RecordService
     from schemas.config import Config, GatewayConfig
 
     db = Database(db_path)

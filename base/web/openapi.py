@@ -4,7 +4,7 @@ Three things Litestar's generator leaves out or gets wrong for our msgspec Struc
 - every message refuses unknown fields (schemas/base.py Message): the document says so with
   `additionalProperties: false`, else a client, or a generator of clients, believes extra fields are fine;
 - patterns are written for Python; the document carries their ECMA-262 form, as JSON Schema requires
-  (schemas/export.py ecma_pattern; path parameters say so with `schema_extra`, gateway/controllers/common.py);
+  (schemas/export.py ecma_pattern; path parameters say so with `schema_extra`, gateway/records/http.py);
 - a bound of zero on an optional number (`ge=0`, `gt=0`: weights, durations, flows) was dropped, Litestar testing
   the bound for truth, so the document allowed negative weights the gateway refuses.
 """

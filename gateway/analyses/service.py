@@ -21,7 +21,7 @@ from gateway.capture.assets import AssetService
 from gateway.jobs import folders, timeline
 from gateway.jobs.capture_time import capture_time
 from gateway.jobs.queue import JobQueue
-from gateway.services.validation import require_live_encounter
+from gateway.records.validation import require_live_encounter
 from gateway.storage.database import Database
 from processing.stages import code_digest
 from schemas.analysis import AnalysisResult

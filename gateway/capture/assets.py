@@ -15,7 +15,7 @@ from base.storage import assets as asset_rows
 from base.storage import audit
 from base.storage.blobs import MediaStore, sha256_of
 from base.storage.records import get_head
-from gateway.services.validation import require_live_encounter
+from gateway.records.validation import require_live_encounter
 from gateway.storage import uploads as upload_rows
 from gateway.storage.database import Database
 from processing.capture.media import check_photo, check_video, sniff

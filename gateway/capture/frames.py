@@ -19,7 +19,7 @@ import msgspec
 from base.accounts.permissions import Principal
 from base.storage import assets as asset_rows
 from gateway.capture.assets import AssetService, insert_asset_row
-from gateway.services.validation import require_live_encounter
+from gateway.records.validation import require_live_encounter
 from gateway.storage.database import Database
 from processing.capture.frames import ExtractedFrame, extract
 from schemas.accounts import Role

@@ -23,7 +23,7 @@ from base.accounts.permissions import Principal, require_capture
 from base.storage import accounts as account_rows
 from base.storage.blobs import MediaStore
 from gateway.capture.assets import AssetService
-from gateway.services.validation import require_live_encounter
+from gateway.records.validation import require_live_encounter
 from gateway.storage import uploads as upload_rows
 from gateway.storage.database import Database
 from schemas.base import iso, utcnow

@@ -19,7 +19,7 @@ from base.folders import analysis_dir, reports_root
 from base.storage import audit
 from base.storage import records as store
 from base.storage.durable import fsync_dir, replace_atomically
-from gateway.services import assessments, decision_support
+from gateway.records import assessments, decision_support
 from processing.report.document import render
 from processing.report.inputs import REPORT_FORMAT, versions_digest
 from processing.snapshot import AnalysisVisit, EncounterSnapshot

@@ -2,7 +2,7 @@
 
 The runner publishes the fact; it does not know who listens. The gateway's composition root (gateway/app.py for
 `burnedge serve`, the CLI for `burnedge worker`) hands the reactions down to the workers, which pass them to each
-job's process: the healing track and decision support react (gateway/services/reactions.py). Reactions are
+job's process: the healing track and decision support react (gateway/reactions.py). Reactions are
 module-level functions, so they cross the process boundary by name.
 """
 

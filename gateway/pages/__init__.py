@@ -1,6 +1,6 @@
 """The clinic's browser face, served by the gateway itself: thin page controllers over the same services as the API.
 
-Pages read and write through gateway/services with the signed-in principal, so one permission rule applies to
+Pages read and write through the domains' services with the signed-in principal, so one permission rule applies to
 both; the templates are in gateway/pages/templates beside the shared layout (base/web/templates)."""
 
 from __future__ import annotations

@@ -8,9 +8,9 @@ from litestar.params import FromQuery, JSONBody
 from base.web.paths import IdPath
 from base.web.problems import BODY, ONE, SESSION, problems
 from base.web.site import AuthedRequest
-from gateway.controllers.common import outcome_response, parse_version, record_response
-from gateway.controllers.records import REPLAYED, UPDATE, WITHDRAW, IfMatch, Reason
 from gateway.dependencies import ServicesDep
+from gateway.records.controller import REPLAYED, UPDATE, WITHDRAW, IfMatch, Reason
+from gateway.records.http import outcome_response, parse_version, record_response
 from schemas.records import Record, RecordHistory, RecordKind
 from schemas.wound import Wound
 

@@ -1,6 +1,6 @@
 """The checks a wound passes before it is stored, and the time of injury it takes from the encounters.
 
-`check_wound` is the record service's check for the kind `wound` (gateway.services.records.RecordCheck): the
+`check_wound` is the record service's check for the kind `wound` (gateway.records.service.RecordCheck): the
 composition root hands it in, so a wound written through the API and one pushed by a phone pass the same checks.
 """
 
@@ -12,7 +12,7 @@ import sqlite3
 import msgspec
 
 from base.storage import records as store
-from gateway.services.validation import bad_field, not_future, require_live
+from gateway.records.validation import bad_field, not_future, require_live
 from schemas.base import utcnow
 from schemas.config import Config
 from schemas.records import RecordKind

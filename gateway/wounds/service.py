@@ -8,8 +8,8 @@ wound's addresses need: a wound is created and listed under its patient.
 from __future__ import annotations
 
 from base.accounts.permissions import Principal, require_write
-from gateway.services.records import RecordService, WriteOutcome
-from gateway.services.validation import bad_field
+from gateway.records.service import RecordService, WriteOutcome
+from gateway.records.validation import bad_field
 from schemas.records import Record, RecordKind
 from schemas.wound import Wound
 

@@ -11,8 +11,8 @@ from litestar.params import FromQuery, HeaderParameter, JSONBody, QueryParameter
 from base.web.paths import IdPath
 from base.web.problems import BODY, ONE, SESSION, problems
 from base.web.site import AuthedRequest
-from gateway.controllers.common import outcome_response, parse_version, record_response
 from gateway.dependencies import ServicesDep
+from gateway.records.http import outcome_response, parse_version, record_response
 from schemas.patient import Encounter, Patient
 from schemas.records import EncounterRecord, Record, RecordHistory, RecordKind
 

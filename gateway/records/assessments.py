@@ -8,8 +8,8 @@ import msgspec
 
 from base.accounts.permissions import Principal
 from base.storage import records as store
-from gateway.services import decision_support
-from gateway.services.computed import store_computed
+from gateway.records import decision_support
+from gateway.records.computed import store_computed
 from processing.clinical.assessment import assess
 from schemas.base import utcnow
 from schemas.clinical_results import Assessment, InputRef

@@ -16,7 +16,7 @@ import msgspec
 from base.accounts.permissions import Principal, require_decide, require_read, require_write
 from base.storage import records as store
 from gateway.jobs import timeline
-from gateway.services.computed import store_computed
+from gateway.records.computed import store_computed
 from processing.clinical import decision_support as rules
 from processing.clinical.decision_inputs import DecisionInputs, Versioned
 from schemas.base import utcnow

@@ -7,9 +7,9 @@ from litestar import Controller, Response, get, post
 from base.web.paths import IdPath
 from base.web.problems import BODY, ONE, problems
 from base.web.site import AuthedRequest
-from gateway.controllers.common import parse_version, record_response
-from gateway.controllers.records import IfMatch
 from gateway.dependencies import ServicesDep
+from gateway.records.controller import IfMatch
+from gateway.records.http import parse_version, record_response
 from schemas.decision_support import RecommendationAct
 from schemas.records import Record, RecordHistory, RecordKind
 

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from gateway.jobs.events import AnalysisStored, Reaction
 from gateway.jobs.timeline import update_track
-from gateway.services.decision_support import refresh_patient
+from gateway.records.decision_support import refresh_patient
 from gateway.storage.database import Database
 from schemas.config import Config
 

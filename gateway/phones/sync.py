@@ -14,7 +14,7 @@ import msgspec
 
 from base.accounts.permissions import Principal, readable_kinds, require_delete, require_write
 from base.storage import records as store
-from gateway.services.records import RecordService
+from gateway.records.service import RecordService
 from schemas.errors import BurnedgeError, Conflict, InvalidInput, VersionMismatch
 from schemas.sync import ChangesPage, Mutation, MutationOp, MutationResult, MutationStatus, PushResponse
 

@@ -22,8 +22,8 @@ from base.accounts.permissions import (
 )
 from base.storage import audit
 from base.storage import records as store
-from gateway.services import validation
-from gateway.services.assessments import refresh_assessments
+from gateway.records import validation
+from gateway.records.assessments import refresh_assessments
 from gateway.storage.database import Database
 from schemas.base import iso
 from schemas.config import Config

@@ -7,7 +7,7 @@ import re
 
 from litestar import Response
 
-from gateway.services.records import WriteOutcome
+from gateway.records.service import WriteOutcome
 from schemas.errors import InvalidInput, PreconditionRequired
 from schemas.records import Record
 

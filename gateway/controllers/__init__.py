@@ -1,1 +1,0 @@
-"""Thin HTTP controllers: parse the request, call one service, shape the response."""

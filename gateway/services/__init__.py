@@ -1,1 +1,0 @@
-"""Services: the gateway's behaviour, independent of HTTP. Controllers stay thin over these."""
