@@ -297,6 +297,11 @@ def _valid_body(path: str, record_id: str) -> dict | None:
     }
     if part in bodies:
         return bodies[part]
+    wound = {"regions": ["lower_arm_left_anterior"], "label": "left forearm"}
+    if part == "wounds":
+        return {"id": uuid7(), "patient_id": record_id, **wound}
+    if path.startswith("/api/v1/wounds"):
+        return {"id": record_id, "patient_id": uuid7(), **wound}
     if path.startswith("/api/v1/patients"):
         return patient_body(record_id)
     if path.startswith("/api/v1/encounters") and part not in ("assessment",):
@@ -307,7 +312,7 @@ def _valid_body(path: str, record_id: str) -> dict | None:
 def test_an_administrator_is_refused_every_clinical_route(app, client, auth):
     checked = 0
     for route in app.routes:
-        if not route.path.startswith(("/api/v1/patients", "/api/v1/encounters")):
+        if not route.path.startswith(("/api/v1/patients", "/api/v1/encounters", "/api/v1/wounds")):
             continue
         for method in sorted(route.methods - {"OPTIONS", "HEAD"}):
             record_id = uuid7()
