@@ -101,6 +101,10 @@ class Record(Frozen):
     meta: RecordMeta
     data: dict
 
+    def value(self) -> msgspec.Struct:
+        """The data as its kind's Struct (RECORD_TYPES): read fields by name, typed, never by string key."""
+        return msgspec.convert(self.data, RECORD_TYPES[self.meta.kind])
+
 
 class RecordHistory(Frozen):
     kind: RecordKind

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import base64
 import binascii
-import datetime as dt
 import hashlib
 import json
 from pathlib import Path
@@ -30,7 +29,6 @@ from schemas.config import Config
 from schemas.errors import Conflict, InvalidInput
 from schemas.jobs import AnalysisJob, AnalysisRequest, BurnAnalysis, JobAttempt, JobInputs, JobState, PictureRef
 from schemas.longitudinal import TrackResult
-from schemas.patient import EncounterMode
 from schemas.records import RecordKind
 
 SUFFIX = {MediaType.jpeg: ".jpg", MediaType.png: ".png", MediaType.heic: ".heic"}
@@ -61,9 +59,11 @@ class AnalysisService:
             PictureRef(asset_id=p.id, sha256=p.sha256, suffix=SUFFIX[p.media_type], filename=p.filename)
             for p in pictures
         ]
+        visit = encounter.value()
         with self.db.read() as conn:
-            patient = store.get_head(conn, RecordKind.patient, encounter.data["patient_id"]).data
-        # What the analysis reads from the record (%TBSA, provisional): a correction makes a new analysis.
+            patient = store.get_head(conn, RecordKind.patient, visit.patient_id).data
+        # What the analysis reads from the record (%TBSA, provisional): a correction makes a new analysis. The
+        # stored JSON values are hashed as they are, so a job queued before keeps its digest.
         record = [
             patient.get("height_cm"),
             patient.get("weight_kg"),
@@ -71,8 +71,7 @@ class AnalysisService:
             encounter.data.get("time_of_injury"),
         ]
         digest = _digest(self.config, refs, body, record)
-        injury = encounter.data.get("time_of_injury")
-        captured = capture_time(pictures, dt.datetime.fromisoformat(injury) if injury else None, self.config.analysis)
+        captured = capture_time(pictures, visit.time_of_injury, self.config.analysis)
         # The queue stamps requested_at when it queues the job.
         inputs = JobInputs(
             pictures=refs, masks=body.masks, ruler=body.ruler, marker_side_mm=body.marker_side_mm, captured=captured
@@ -82,10 +81,10 @@ class AnalysisService:
             job_id, created = self.queue.enqueue_in(
                 conn,
                 encounter_id=encounter_id,
-                patient_id=encounter.data["patient_id"],
+                patient_id=visit.patient_id,
                 input_digest=digest,
                 inputs=inputs,
-                mode=EncounterMode(encounter.data["mode"]),
+                mode=visit.mode,
                 created_by=principal.username,
                 user_id=principal.user_id,
             )

@@ -36,16 +36,10 @@ def sessions(db: Database, config: Config, patient_id: str) -> list:
         encounter = store.find_head(conn, RecordKind.encounter, encounter_id)
         if encounter is None or encounter.meta.deleted:
             continue
-        injury = encounter.data.get("time_of_injury")
+        visit = encounter.value()
         # Jobs queued before capture times were kept: the visit's arrival stands in.
-        taken = job.captured.at if job.captured else None
-        visits.append(
-            (
-                dt.datetime.fromisoformat(taken or encounter.data["time_of_arrival"]),
-                job.id,
-                dt.datetime.fromisoformat(injury) if injury else None,
-            )
-        )
+        taken = dt.datetime.fromisoformat(job.captured.at) if job.captured else visit.time_of_arrival
+        visits.append((taken, job.id, visit.time_of_injury))
     visits.sort()
     from processing.longitudinal.track import SessionAnalysis  # Open3D: only ever in a job's process
 

@@ -80,7 +80,7 @@ class EncounterView:
 def encounter_header(services: Services, who: Principal, encounter_id: str) -> tuple[Record, Record]:
     """(encounter, patient): the two every encounter page names in its heading."""
     encounter = services.records.get(who, RecordKind.encounter, encounter_id)
-    patient = services.records.get(who, RecordKind.patient, encounter.data["patient_id"])
+    patient = services.records.get(who, RecordKind.patient, encounter.value().patient_id)
     return encounter, patient
 
 

@@ -26,7 +26,7 @@ def _struct(record: Record):
 def compute(conn: sqlite3.Connection, encounter_id: str, config: Config, now) -> Assessment:
     """The encounter's Assessment as of `now`, from the current versions of its record (nothing stored)."""
     encounter = store.get_head(conn, RecordKind.encounter, encounter_id)
-    patient = store.get_head(conn, RecordKind.patient, encounter.data["patient_id"])
+    patient = store.get_head(conn, RecordKind.patient, encounter.value().patient_id)
     parts = {k: r for k, r in store.heads_of_children(conn, encounter_id, _INPUT_PARTS).items() if not r.meta.deleted}
     used = [patient, encounter, *parts.values()]
     return assess(

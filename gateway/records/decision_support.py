@@ -61,7 +61,7 @@ def _track(conn: sqlite3.Connection, config: Config, patient_id: str) -> tuple[T
 def gather(conn: sqlite3.Connection, config: Config, encounter_id: str, as_of: dt.datetime) -> DecisionInputs:
     """What the rules read, from the current versions of the encounter's record."""
     encounter = store.get_head(conn, RecordKind.encounter, encounter_id)
-    patient = store.get_head(conn, RecordKind.patient, encounter.data["patient_id"])
+    patient = store.get_head(conn, RecordKind.patient, encounter.value().patient_id)
     heads = store.heads_of_children(conn, encounter_id, _PARTS)
     parts = {_PARTS[kind]: versioned(r) for kind, r in heads.items() if not r.meta.deleted}
     assessment = parts.get("assessment")

@@ -142,7 +142,7 @@ def require_live(conn: sqlite3.Connection, kind: RecordKind, record_id: str) -> 
 def require_live_encounter(conn: sqlite3.Connection, encounter_id: str) -> Record:
     """The encounter, if it and its patient exist and are not withdrawn."""
     encounter = require_live(conn, RecordKind.encounter, encounter_id)
-    require_live(conn, RecordKind.patient, encounter.data["patient_id"])
+    require_live(conn, RecordKind.patient, encounter.value().patient_id)
     return encounter
 
 
