@@ -17,6 +17,8 @@ from schemas.record_parts import Intake, Mechanism, PrimarySurvey, Resuscitation
 T = TypeVar("T")
 
 HOURS_PER_DAY = 24.0
+ADULT_FROM_YEARS = 18.0
+"""Adult doses and targets apply from 18 years in the rules that draw the line there (pain, electrical urine)."""
 
 
 @dataclass(frozen=True)

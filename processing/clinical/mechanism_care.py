@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import re
 
-from processing.clinical.decision_inputs import DecisionInputs
+from processing.clinical.decision_inputs import ADULT_FROM_YEARS, DecisionInputs
 from processing.clinical.sources_major import (
     EM_PRACTICE_ELECTRICAL,
     JTS_BURN_CARE,
@@ -24,7 +24,6 @@ from schemas.record_parts import Avpu, MechanismType
 HIGH_VOLTAGE_V = 1000.0
 ELECTRICAL = (MechanismType.electrical_low_voltage, MechanismType.electrical_high_voltage, MechanismType.lightning)
 HYDROFLUORIC = re.compile(r"hydrofluoric|\bHF\b|hydrogen fluoride", re.IGNORECASE)
-ADULT_FROM_YEARS = 18.0
 PIGMENT_URINE_ML_H = (75, 100)
 """Joint Trauma System: adults with pigmented urine, until it clears."""
 

@@ -13,12 +13,11 @@ from dataclasses import dataclass
 import msgspec
 
 from processing.clinical import pain_opioids
-from processing.clinical.decision_inputs import DecisionInputs
+from processing.clinical.decision_inputs import ADULT_FROM_YEARS, DecisionInputs
 from processing.clinical.pain_allergy import allergy_to
 from processing.clinical.sources import NHS_PARACETAMOL_ADULT, RCH_ANALGESIA
 from schemas.decision_support import InputUsed, Recommendation, RecommendationCategory
 
-ADULT_FROM_YEARS = 18.0
 ADULT_FIXED_DOSE_FROM_KG = 50.0
 """The adult fixed dose is for 50 kg and over; under it the source says to check the maximum dose."""
 PARACETAMOL_FROM_MONTHS = 3.0

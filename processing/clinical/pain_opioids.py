@@ -12,13 +12,12 @@ which offers fentanyl or morphine). No adult alternative is given by the sources
 from __future__ import annotations
 
 from processing.clinical.airway import signs_present
-from processing.clinical.decision_inputs import DecisionInputs
+from processing.clinical.decision_inputs import ADULT_FROM_YEARS, DecisionInputs
 from processing.clinical.mechanism_care import ELECTRICAL, high_voltage
 from processing.clinical.pain_allergy import allergy_to
 from processing.clinical.sources_major import PCH_BURNS_ANALGESIA, VICBURNS_ANALGESIA
 from schemas.decision_support import InputUsed, Recommendation, RecommendationCategory
 
-ADULT_FROM_YEARS = 18.0
 CHILD_IV_FROM_YEARS = 1.0
 SEVERE_OVER_TBSA = 20.0
 MORPHINE_CHILD_MG_PER_KG = (0.05, 0.1)
@@ -38,8 +37,9 @@ def severity(inputs: DecisionInputs) -> list[InputUsed]:
         why.append(assessment.used("%TBSA", f"{tbsa.tbsa_percent:g} %"))
     elif plan is not None and plan.formal_resuscitation_indicated:
         why.append(assessment.used("formal fluid resuscitation indicated", True))
-    if signs_present(inputs):
-        why.append(signs_present(inputs)[0])
+    signs = signs_present(inputs)
+    if signs:
+        why.append(signs[0])
     if inputs.mechanism is not None and inputs.mechanism.value.type in ELECTRICAL and high_voltage(inputs):
         why.append(inputs.mechanism.used("high-voltage injury", True))
     return why
