@@ -199,3 +199,12 @@ def test_signing_out_ends_the_session_for_the_cookie_too(nurse, services):
     nurse.cookies.set("burnedge_session", cookie)
     r = nurse.get("/patients", follow_redirects=False)
     assert r.status_code == 303 and r.headers["location"].startswith("/sign-in")
+
+
+def test_the_referral_card_names_undecided_criteria_in_words_not_codes(client, services):
+    make_user(services, "nina", Role.nurse)
+    sign_in(client, "nina")
+    encounter_id = _new_encounter(client, _new_patient(client, given_name="Lena"))
+    html = client.get(f"/encounters/{encounter_id}").text
+    assert "Not yet judged (record what is missing): Thermal: full-thickness burns (any size)" in html
+    assert "aba2022." not in html
