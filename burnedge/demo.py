@@ -35,16 +35,25 @@ from schemas.record_parts import (
     SecondarySurvey,
 )
 from schemas.records import RecordKind
+from schemas.wound import Wound, WoundSide
 
 DEMO_PATIENT_ID = "0192f3b4-6a8e-7c3d-9b1a-2f4e5d6c7b99"
 """The one demo patient: the healing series (burnedge/demo_series.py) is his forearm burn."""
 DEMO_VISIT_IDS = [f"0192f3b4-6a8f-7000-8000-00000000f00{i}" for i in range(4)]
+FOREARM_WOUND_ID = "0192f3b4-6a90-7000-8000-00000000a001"
+"""The forearm burn the healing series follows over four visits."""
+SHIN_WOUND_ID = "0192f3b4-6a90-7000-8000-00000000a002"
+"""A second, smaller splash burn on the left shin, photographed on the first visit: tracked apart from the forearm."""
 DEMO_ENCOUNTER_ID = DEMO_VISIT_IDS[0]
 """The day-0 emergency visit, with the full record."""
 SERIES_DAYS = (0, 7, 14, 21)
 BURN_REGION_FRACTION = 0.065
 """The charted share of the right forearm's back (Lund-Browder: 1.5 % of an adult's body surface): about 18 cm2 on
 this patient (1.85 m2), the size of the rendered burn."""
+SHIN_REGION_FRACTION = 0.02
+"""The charted share of the front of the left lower leg (Lund-Browder: 1.75 % of an adult's body surface): about
+6 cm2, the size of the second rendered burn."""
+SHIN_AREA_CM2 = 6.0
 DEMO_USERS = {"admin": Role.admin, "clinician": Role.clinician, "nurse": Role.nurse, "consultant": Role.consultant}
 
 
@@ -67,7 +76,8 @@ def seed_accounts(services: Services, credentials_file: Path) -> dict[str, str]:
 
 def seed_patient(services: Services) -> None:
     """The demo patient: a small deep partial-thickness burn of the right forearm from a pan of hot oil, seen on
-    the day and at 7, 14 and 21 days (the visits the series' photos belong to)."""
+    the day and at 7, 14 and 21 days (the visits the series' photos belong to), and a smaller splash of the same
+    oil on the left shin: two wounds, each tracked on its own."""
     clinician = services.accounts.user_named("clinician")
     who = Principal(clinician.id, "clinician", Role.clinician, None, "demo-seed")
     if services.records.list_records(who, RecordKind.patient, limit=1):
@@ -153,8 +163,41 @@ def seed_patient(services: Services) -> None:
                 entries=[
                     BurnChartEntry(
                         region=R.lower_arm_right_posterior, fraction=BURN_REGION_FRACTION, depth=BurnDepth.deep_partial
-                    )
+                    ),
+                    BurnChartEntry(
+                        region=R.lower_leg_left_anterior,
+                        fraction=SHIN_REGION_FRACTION,
+                        depth=BurnDepth.superficial_partial,
+                    ),
                 ],
+            ),
+        ),
+        (
+            RecordKind.wound,
+            FOREARM_WOUND_ID,
+            Wound(
+                id=FOREARM_WOUND_ID,
+                patient_id=DEMO_PATIENT_ID,
+                regions=[R.lower_arm_right_posterior],
+                label="right forearm",
+                side=WoundSide.right,
+                site_detail="back of the forearm, mid-shaft",
+                cause=MechanismType.scald,
+                time_of_injury=injury,
+            ),
+        ),
+        (
+            RecordKind.wound,
+            SHIN_WOUND_ID,
+            Wound(
+                id=SHIN_WOUND_ID,
+                patient_id=DEMO_PATIENT_ID,
+                regions=[R.lower_leg_left_anterior],
+                label="left shin",
+                side=WoundSide.left,
+                site_detail="splash, front of the shin",
+                cause=MechanismType.scald,
+                time_of_injury=injury,
             ),
         ),
     ]
@@ -210,7 +253,8 @@ def _summary(services: Services, config: Config, passwords: dict[str, str], db_p
     base = f"http://{config.gateway.host}:{config.gateway.port}"
     lines = [
         "burnedge demo: one patient seeded in " + str(db_path) + ": Tomas Demo, a deep partial-thickness burn of the"
-        " right forearm (hot oil), seen on the day and at 7, 14 and 21 days",
+        " right forearm (hot oil), seen on the day and at 7, 14 and 21 days, and a smaller splash on the left shin"
+        " (two wounds, tracked apart)",
         f"  %TBSA (Lund-Browder, superficial excluded): {tbsa['tbsa_percent']:.1f} %"
         f"  (Rule of Nines: {tbsa['rule_of_nines_percent']:.1f} %)",
         "  Fluids: " + _fluid_line(fluids),

@@ -61,14 +61,19 @@ class GatewayClient:
     def get_bytes(self, path: str, what: str) -> bytes:
         return self._check(self.http.get(path), what).content
 
-    def upload(self, path: Path, encounter_id: str, attempts: int = 5, data: bytes | None = None) -> dict:
-        """One photo over tus (`data` instead of the file's bytes when given); a dropped connection resumes from the
-        offset the gateway has. Returns the upload."""
+    def upload(
+        self,
+        path: Path,
+        encounter_id: str,
+        attempts: int = 5,
+        data: bytes | None = None,
+        wound_id: str | None = None,
+    ) -> dict:
+        """One photo over tus (`data` instead of the file's bytes when given), of the wound `wound_id` when given; a
+        dropped connection resumes from the offset the gateway has. Returns the upload."""
         data = path.read_bytes() if data is None else data
-        meta = ",".join(
-            f"{k} {base64.b64encode(v.encode()).decode()}"
-            for k, v in {"encounter_id": encounter_id, "filename": path.name}.items()
-        )
+        fields = {"encounter_id": encounter_id, "filename": path.name} | ({"wound_id": wound_id} if wound_id else {})
+        meta = ",".join(f"{k} {base64.b64encode(v.encode()).decode()}" for k, v in fields.items())
         r = self._check(
             self.http.post(
                 "/api/v1/uploads", headers={**TUS, "Upload-Length": str(len(data)), "Upload-Metadata": meta}

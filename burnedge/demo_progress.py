@@ -119,3 +119,20 @@ def summary_table(track: dict, jobs: list[dict], results: list[dict]) -> str:
     for note in track.get("notes", []):
         lines.append(f"  note: {note}")
     return "\n".join(lines)
+
+
+def wounds_lines(forearm: dict, shin: dict, shin_healing: dict) -> list[str]:
+    """The two wounds side by side: each one's own latest area, its share of the body beside the chart's."""
+    lines = ["Two wounds, each tracked on its own (the forearm's visits above; the shin photographed on day 0):"]
+    for label, healing, fallback in (("right forearm", forearm, {}), ("left shin", shin_healing, shin)):
+        share = healing.get("share") or {}
+        sessions = (healing.get("track") or {}).get("sessions", [])
+        area = sessions[-1].get("area_cm2") if sessions else (fallback.get("metrics") or {}).get("area_cm2")
+        measured, charted = share.get("measured_percent"), share.get("charted_percent")
+        lines.append(
+            f"  {label:<14} {len(sessions)} measured visit(s), latest area {_fmt(area)} cm2;"
+            f" %TBSA measured in 3D {_fmt(measured, '.3f')} beside the chart's {_fmt(charted, '.3f')}"
+            + (f"  CHECK: {share['flag']}" if share.get("flag") else "")
+        )
+    lines.append("  (3D: area over the Mosteller BSA; chart: Lund-Browder for the wound's regions)")
+    return lines

@@ -21,7 +21,15 @@ import httpx
 import uvicorn
 
 from base.storage.durable import replace_atomically
-from burnedge.demo import DEMO_ENCOUNTER_ID, DEMO_PATIENT_ID, DEMO_VISIT_IDS, SERIES_DAYS
+from burnedge.demo import (
+    DEMO_ENCOUNTER_ID,
+    DEMO_PATIENT_ID,
+    DEMO_VISIT_IDS,
+    FOREARM_WOUND_ID,
+    SERIES_DAYS,
+    SHIN_AREA_CM2,
+    SHIN_WOUND_ID,
+)
 from burnedge.demo_client import GatewayClient, GatewayError
 from burnedge.demo_progress import ProgressBar
 from gateway.app import create_app
@@ -42,38 +50,32 @@ class SeriesOptions:
     """Send the phantom's exact burn masks as a clinician's masks (otherwise the model finds the burn)."""
 
 
+SHIN = "shin"
+"""The second burn's folder inside the series' folder."""
+
+
 def render_series(options: SeriesOptions) -> Path:
-    """Render the series in a process of its own (the renderer's native libraries stay out of the gateway)."""
+    """Render the forearm series and the shin's one visit, each in a process of its own (the renderer's native
+    libraries stay out of the gateway); reused when already rendered with the same options."""
     spec = {"views": options.views, "width": options.width, "height": options.height, "seed": options.seed}
-    stamp = options.folder / "demo-spec.json"
-    if stamp.exists() and json.loads(stamp.read_text()) == spec and (options.folder / "ground_truth.json").exists():
-        return options.folder
-    command = [
-        sys.executable,
-        "-m",
-        "burnedge.cli",
-        "phantom",
-        "--series",
-        "--out",
-        str(options.folder),
-        "--views",
-        str(options.views),
-        "--width",
-        str(options.width),
-        "--height",
-        str(options.height),
-        "--seed",
-        str(options.seed),
-        "--area-cm2",
-        "18",
-        "--depth-mm",
-        "2.5",
-    ]
+    size = ["--views", str(options.views), "--width", str(options.width), "--height", str(options.height)]
+    _render(options.folder, spec, ["--series", *size, "--seed", str(options.seed), "--area-cm2", "18"])
+    shin = ["--shape", "patch", *size, "--seed", str(options.seed + 1), "--area-cm2", f"{SHIN_AREA_CM2:g}"]
+    _render(options.folder / SHIN, spec, shin + ["--depth-mm", "1.5"])
+    return options.folder
+
+
+def _render(folder: Path, spec: dict, arguments: list[str]) -> None:
+    stamp = folder / "demo-spec.json"
+    if stamp.exists() and json.loads(stamp.read_text()) == spec and (folder / "ground_truth.json").exists():
+        return
+    command = [sys.executable, "-m", "burnedge.cli", "phantom", "--out", str(folder), *arguments]
+    if "--depth-mm" not in arguments:
+        command += ["--depth-mm", "2.5"]
     done = subprocess.run(command, capture_output=True, text=True)
     if done.returncode != 0:
         raise GatewayError(f"rendering the demo phantoms failed: {done.stderr[-2000:]}")
     stamp.write_text(json.dumps(spec))
-    return options.folder
 
 
 class ServedGateway:
@@ -129,50 +131,75 @@ def visit_arrivals(client: GatewayClient) -> list[tuple[str, dt.datetime]]:
     return visits
 
 
-def analyse_series(client: GatewayClient, series: Path, options: SeriesOptions, bar: ProgressBar) -> list[dict]:
-    """Upload each visit's photos, ask for its analysis, follow them all; returns the finished jobs."""
+def analyse_series(
+    client: GatewayClient, series: Path, options: SeriesOptions, bar: ProgressBar
+) -> tuple[list[dict], dict]:
+    """Upload each visit's photos of the forearm, and the shin's on the first visit, each for its own wound; ask for
+    the analyses and follow them all. Returns the forearm's finished jobs and the shin's."""
     jobs = []
-    for day, (visit_id, arrival) in zip(SERIES_DAYS, visit_arrivals(client), strict=True):
+    visits = visit_arrivals(client)
+    for day, (visit_id, arrival) in zip(SERIES_DAYS, visits, strict=True):
+        name = f"day {day:>2}"
         session = series / f"session_day{day:02d}"
-        photos = sorted((session / "images").glob("*.jpg"))
-        assets = {}
-        for i, photo in enumerate(photos, 1):
-            # As a phone would: each photo says when it was taken (a few minutes after the arrival, on its day).
-            taken = (arrival + dt.timedelta(minutes=10, seconds=20 * i)).astimezone()
-            upload = client.upload(photo, visit_id, data=with_capture_time(photo.read_bytes(), taken))
-            assets[photo.stem] = upload["asset"]
-            bar.line(f"day {day:>2}: uploaded {i}/{len(photos)} photos", final=i == len(photos))
-        request: dict = {"assets": [a["id"] for a in assets.values()]}
-        if options.clinician_masks:
-            request["masks"] = [
-                {"asset_id": assets[m.stem]["id"], "png_base64": _b64(m)}
-                for m in sorted((session / "masks").glob("*.png"))
-                if m.stem in assets
-            ]
-        jobs.append((day, client.post(f"/api/v1/encounters/{visit_id}/analyses", request, f"analyse day {day}")))
+        jobs.append((name, _request(client, session, visit_id, arrival, FOREARM_WOUND_ID, options, bar, name)))
+    visit_id, arrival = visits[0]
+    jobs.append(("shin  ", _request(client, series / SHIN, visit_id, arrival, SHIN_WOUND_ID, options, bar, "shin  ")))
     finished = []
-    for day, job in jobs:
-        last = client.follow(job["id"], lambda e, d=day: bar.update(f"day {d:>2}", e))
+    for name, job in jobs:
+        last = client.follow(job["id"], lambda e, n=name: bar.update(n, e))
         job = client.get(f"/api/v1/analyses/{job['id']}", "read the analysis")
-        bar.done(f"day {day:>2}", last, job.get("history", []))
+        bar.done(name, last, job.get("history", []))
         finished.append(job)
-    return finished
+    return finished[:-1], finished[-1]
 
 
-def healing_track(client: GatewayClient, visits: int, timeout_s: float = 300.0) -> dict:
-    """The patient's healing track once it holds every measured visit (the worker updates it after each)."""
+def _request(
+    client: GatewayClient,
+    session: Path,
+    visit_id: str,
+    arrival: dt.datetime,
+    wound_id: str,
+    options: SeriesOptions,
+    bar: ProgressBar,
+    name: str,
+) -> dict:
+    """Upload one capture of one wound as a phone would, then ask for its analysis; returns the queued job."""
+    photos = sorted((session / "images").glob("*.jpg"))
+    assets = {}
+    for i, photo in enumerate(photos, 1):
+        # As a phone would: each photo says when it was taken (a few minutes after the arrival, on its day).
+        taken = (arrival + dt.timedelta(minutes=10, seconds=20 * i)).astimezone()
+        data = with_capture_time(photo.read_bytes(), taken)
+        assets[photo.stem] = client.upload(photo, visit_id, data=data, wound_id=wound_id)["asset"]
+        bar.line(f"{name}: uploaded {i}/{len(photos)} photos", final=i == len(photos))
+    request: dict = {"wound_id": wound_id, "assets": [a["id"] for a in assets.values()]}
+    if options.clinician_masks:
+        request["masks"] = [
+            {"asset_id": assets[m.stem]["id"], "png_base64": _b64(m)}
+            for m in sorted((session / "masks").glob("*.png"))
+            if m.stem in assets
+        ]
+    return client.post(f"/api/v1/encounters/{visit_id}/analyses", request, f"analyse {name.strip()}")
+
+
+def healing_track(client: GatewayClient, wound_id: str, visits: int, timeout_s: float = 300.0) -> dict:
+    """The wound's healing (its track and share of the body) once its track holds every measured visit (the worker
+    updates it after each)."""
     deadline = time.monotonic() + timeout_s
-    track: dict = {}
+    healing: dict = {}
     while time.monotonic() < deadline:
-        try:
-            track = client.get(f"/api/v1/patients/{DEMO_PATIENT_ID}/healing", "read the healing track")
-            if len(track.get("sessions", [])) >= visits:
-                return track
-        except GatewayError as exc:
-            if exc.http_status != 404:
-                raise
+        healing = client.get(f"/api/v1/wounds/{wound_id}/healing", "read the healing track")
+        if len((healing.get("track") or {}).get("sessions", [])) >= visits:
+            return healing
         time.sleep(1)
-    return track
+    return healing
+
+
+def _result(client: GatewayClient, job: dict) -> dict:
+    try:
+        return client.get(f"/api/v1/analyses/{job['id']}/result", "read the result")
+    except GatewayError:
+        return {"status": job["state"], "reason": job.get("error")}
 
 
 def _b64(path: Path) -> str:
@@ -183,7 +210,7 @@ def _b64(path: Path) -> str:
 
 def run_demo(config: Config, options: SeriesOptions, password: str, *, keep_serving: bool) -> str:
     """Render, serve, upload, analyse, align; returns the summary (also printed before serving on)."""
-    from burnedge.demo_progress import summary_table
+    from burnedge.demo_progress import summary_table, wounds_lines
     from gateway.jobs.folders import analysis_dir, patient_dir
 
     bar = ProgressBar()
@@ -194,15 +221,13 @@ def run_demo(config: Config, options: SeriesOptions, password: str, *, keep_serv
     try:
         bar.line(f"gateway with its analysis worker on {gateway.url}; acting as the clinic's phone")
         client.login("clinician", password)
-        jobs = analyse_series(client, series, options, bar)
-        results = []
-        for job in jobs:
-            try:
-                results.append(client.get(f"/api/v1/analyses/{job['id']}/result", "read the result"))
-            except GatewayError:
-                results.append({"status": job["state"], "reason": job.get("error")})
+        jobs, shin_job = analyse_series(client, series, options, bar)
+        results = [_result(client, job) for job in jobs]
         measured = sum(r.get("status") == "ok" for r in results)
-        track = healing_track(client, measured) if measured else {}
+        healing = healing_track(client, FOREARM_WOUND_ID, measured) if measured else {}
+        track = healing.get("track") or {}
+        shin = _result(client, shin_job)
+        shin_healing = healing_track(client, SHIN_WOUND_ID, 1) if shin.get("status") == "ok" else {}
         files = [
             f"  day {day:>2}: {analysis_dir(config, job['id']) / 'surface' / 'burn_surface.glb'}"
             f"  ({gateway.url}/api/v1/analyses/{job['id']}/artifacts)"
@@ -220,10 +245,13 @@ def run_demo(config: Config, options: SeriesOptions, password: str, *, keep_serv
                 "",
                 summary_table(track, jobs, results),
                 "",
+                *wounds_lines(healing, shin, shin_healing),
+                "",
                 "Painted burn meshes (GLB; open in any glTF viewer) and every file of each analysis:",
                 *files,
-                f"Healing track: {patient_dir(config, DEMO_PATIENT_ID) / 'track.json'}"
-                f"  ({gateway.url}/api/v1/patients/{DEMO_PATIENT_ID}/healing)",
+                f"Healing track: {patient_dir(config, DEMO_PATIENT_ID) / 'wounds' / FOREARM_WOUND_ID / 'track.json'}"
+                f"  ({gateway.url}/api/v1/wounds/{FOREARM_WOUND_ID}/healing; both wounds:"
+                f" {gateway.url}/api/v1/patients/{DEMO_PATIENT_ID}/healing)",
                 f"The analyses' log (COLMAP and the workers): {config.jobs.log_file or 'the output above'}",
                 f"The clinical report of the day-0 visit (all four visits, decision support): {report}"
                 f"  ({gateway.url}/api/v1/encounters/{DEMO_ENCOUNTER_ID}/report.pdf)",

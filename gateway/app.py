@@ -35,7 +35,7 @@ from gateway.records.parts_controller import PART_CONTROLLERS
 from gateway.scheduler import start_scheduler
 from gateway.storage.database import Database
 from gateway.transfers.controller import TransferController
-from gateway.wounds.controller import PatientWoundsController, WoundController
+from gateway.wounds.controller import PatientHealingController, PatientWoundsController, WoundController
 from schemas.config import Config
 
 
@@ -54,6 +54,7 @@ def create_app(config: Config, *, start_workers: bool = False) -> Litestar:
             PatientController,
             EncounterController,
             PatientWoundsController,
+            PatientHealingController,
             WoundController,
             *PART_CONTROLLERS,
             DecisionSupportController,

@@ -1,4 +1,4 @@
-"""What the gateway does when an analysis is stored: the patient's healing track and decision support follow.
+"""What the gateway does when an analysis is stored: the wound's healing track and decision support follow.
 
 The analysis jobs publish the fact (gateway/jobs/events.py); the composition root hands these reactions to the
 workers. The order matters: decision support reads the track the first reaction wrote.
@@ -14,7 +14,7 @@ from schemas.config import Config
 
 
 def healing_track(db: Database, config: Config, event: AnalysisStored) -> None:
-    update_track(db, config, event.patient_id)
+    update_track(db, config, event.patient_id, event.wound_id)
 
 
 def decision_support(db: Database, config: Config, event: AnalysisStored) -> None:

@@ -37,3 +37,18 @@ def encounter_body(patient_id: str, encounter_id: str | None = None, injury_hour
     }
     body.update(extra)
     return body
+
+
+def wound_body(patient_id: str, wound_id: str | None = None, **extra) -> dict:
+    """A wound of the patient: a scald of the left forearm unless `extra` says otherwise."""
+    body = {
+        "id": wound_id or uuid7(),
+        "patient_id": patient_id,
+        "regions": ["lower_arm_left_anterior", "hand_left_dorsal"],
+        "label": "left forearm",
+        "side": "left",
+        "site_detail": "ulnar border to the back of the hand",
+        "cause": "scald",
+    }
+    body.update(extra)
+    return body

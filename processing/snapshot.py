@@ -1,5 +1,5 @@
-"""One encounter's record as read in one snapshot: every part with the version read, the measured visits of the
-patient, the healing track and the consultants' notes. The report (processing/report), the FHIR export
+"""One encounter's record as read in one snapshot: every part with the version read, the patient's wounds, the
+measured visits of each, each wound's healing and the consultants' notes. The report (processing/report), the FHIR export
 (processing/fhir) and the gateway's services all take this one type; neither document defines its own."""
 
 from __future__ import annotations
@@ -14,10 +14,11 @@ from schemas.burn_chart import BurnChart
 from schemas.clinical_results import Assessment, FluidPlan, InputRef
 from schemas.decision_support import DecisionSupport
 from schemas.jobs import BurnAnalysis
-from schemas.longitudinal import TrackResult
 from schemas.patient import Encounter, Patient
 from schemas.record_parts import Intake, Mechanism, PrimarySurvey, Resuscitation, SecondarySurvey
 from schemas.transfer import Consultation
+from schemas.wound import Wound
+from schemas.wound_healing import WoundHealing
 
 
 @dataclass(frozen=True)
@@ -30,6 +31,10 @@ class AnalysisVisit:
     visit: str
     """How the visit is named: "this encounter", or its date and day since injury."""
     day: float | None = None
+    wound_id: str | None = None
+    """The wound measured (None: a patient with no wound recorded)."""
+    wound: str = ""
+    """The wound's label ("left forearm"); empty when it has none."""
 
 
 @dataclass(frozen=True)
@@ -51,8 +56,12 @@ class EncounterSnapshot:
     fluids_now: FluidPlan | None = None
     """The fluid plan recomputed at made_at: the rate to run now moves with the clock."""
     decision_support: Versioned[DecisionSupport] | None = None
+    wounds: list[Versioned[Wound]] = field(default_factory=list)
+    """The patient's live wounds, oldest first."""
     analyses: list[AnalysisVisit] = field(default_factory=list)
-    track: TrackResult | None = None
+    """The latest analysis of each wound at each visit, in the order the photos were taken."""
+    healing: list[WoundHealing] = field(default_factory=list)
+    """Each wound's healing track and measured share of the body, in the order of `wounds`."""
     consultations: list[Versioned[Consultation]] = field(default_factory=list)
     audit_head: AuditHead | None = None
     """The audit chain's newest entry before this report was made."""
@@ -60,5 +69,5 @@ class EncounterSnapshot:
     def refs(self) -> list[InputRef]:
         parts = [self.patient, self.encounter, self.intake, self.primary, self.secondary, self.mechanism, self.chart]
         parts += [self.resuscitation, self.assessment, self.decision_support]
-        parts += [a.analysis for a in self.analyses] + list(self.consultations)
+        parts += [a.analysis for a in self.analyses] + list(self.consultations) + list(self.wounds)
         return [p.ref for p in parts if p is not None]

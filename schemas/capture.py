@@ -143,6 +143,9 @@ class Asset(Frozen):
     created_at: str
     created_by: str
     device_id: str | None
+    wound_id: str | None = None
+    """The wound it shows (Upload-Metadata wound_id, or set later); None when not said. A frame takes its
+    video's."""
 
 
 class UploadPhase(enum.StrEnum):

@@ -121,6 +121,9 @@ class AnalysisRequest(Frozen):
     ruler: RulerInput | None = None
     marker_side_mm: Annotated[float, msgspec.Meta(gt=0, le=500)] | None = None
     """Printed side of each marker square when it is not the configured one (20 mm by default)."""
+    wound_id: Id | None = None
+    """The wound measured: its pictures in the encounter are used unless `assets` names them. Required when the
+    patient has more than one open wound; left out, a patient's only wound (or only open one) is meant."""
 
 
 class AnalysisJob(Frozen):
@@ -157,6 +160,8 @@ class AnalysisJob(Frozen):
     """Once done: 'ok' (measured in mm and cm) or 'unscaled'; 'failed' when the capture could not be measured."""
     captured: CaptureTime | None = None
     """When the pictures were taken (None for jobs an older gateway queued)."""
+    wound_id: str | None = None
+    """The wound measured; None for a patient who had no wound recorded when it was asked for."""
     history: list[str] = msgspec.field(default_factory=list)
     """How each earlier try ended, in words ('try 1 ended by SIGSEGV in the mesh stage; retried from mesh');
     the details are at /attempts."""
@@ -193,6 +198,7 @@ class StoredJob(Frozen):
     cleaned_at: str | None = None
     """When the retention clean-up removed its work files."""
     captured: CaptureTime | None = None
+    wound_id: str | None = None
 
 
 class JobEvent(Frozen):
@@ -221,6 +227,9 @@ class BurnAnalysis(Frozen):
     """The measurement with its confidence, scale, provenance and notes; decision support only."""
     captured: CaptureTime | None = None
     """When the pictures were taken: result.hours_since_injury counts to it."""
+    wound_id: str | None = None
+    """The wound measured (None: asked for before wounds were kept, or for a patient with none recorded; the
+    analysis job's row holds the wound the upgrade gave it)."""
 
 
 class PictureRef(Frozen):

@@ -94,6 +94,23 @@ class BundlePart(Frozen):
     size: int
 
 
+class CaseWound(Frozen):
+    """One of the patient's wounds as the case summary shows it, with what this encounter measured of it."""
+
+    wound_id: str
+    """The wound record's id (its record is in the bundle's wounds.json, its healing in healing.json)."""
+    label: str
+    """The name people use for it ("left forearm")."""
+    regions: list[str]
+    """The Lund-Browder regions it covers (empty for a wound the upgrade made, until a clinician sets them)."""
+    state: str
+    """open, healing, healed, grafted or closed_other."""
+    analyses: int
+    """This encounter's finished 3D analyses of the wound."""
+    area_cm2: float | None
+    """Burn area of the latest of those with a metric scale; None when none has one."""
+
+
 class CaseSummary(Frozen):
     """What a consultant's case list shows before opening a case."""
 
@@ -108,6 +125,10 @@ class CaseSummary(Frozen):
     area_cm2: float | None
     """Burn area of the latest analysis with a metric scale; None when none has one."""
     analysis_confidence: str | None
+    """Confidence level ('high', 'moderate', 'low') of that latest scaled analysis."""
+    wounds: list[CaseWound] = []
+    """The patient's live wounds, oldest first; empty for a patient with none (and in bundles sent before wounds
+    were kept). An analysis without a wound counts for the patient's only wound."""
 
 
 class BundleManifest(Frozen):

@@ -49,7 +49,10 @@ class WoundState(enum.StrEnum):
 
 Regions = Annotated[
     list[LundBrowderRegion],
-    msgspec.Meta(min_length=1, max_length=len(LundBrowderRegion), description="At least one region, each once."),
+    msgspec.Meta(
+        max_length=len(LundBrowderRegion),
+        description="Each region once; at least one when written (a wound the upgrade made may have none yet).",
+    ),
 ]
 
 Label = Annotated[ShortText, msgspec.Meta(min_length=1)]
@@ -64,7 +67,8 @@ class Wound(Message):
     patient_id: Id
     """The patient the wound belongs to; fixed once the wound is created."""
     regions: Regions
-    """The Lund-Browder regions the wound covers: at least one, each listed once."""
+    """The Lund-Browder regions the wound covers, each listed once: the gateway needs at least one when the wound is
+    written. Only a wound the upgrade made for earlier analyses can have none, until a clinician sets them."""
     label: Label
     """A short name people use for it ("left forearm"), unique enough to tell the patient's wounds apart."""
     side: WoundSide | None = None
@@ -82,3 +86,10 @@ class Wound(Message):
     """The date the wound reached its state: required unless the state is open, and only then."""
     notes: LongText = ""
     """Anything else worth knowing about this wound."""
+
+
+class AssetWound(Message):
+    """PUT /api/v1/assets/{asset_id}/wound: which wound a picture shows."""
+
+    wound_id: Id | None
+    """A live wound of the encounter's patient; None says the picture shows no wound in particular."""

@@ -73,8 +73,9 @@ class Pair:
             yield client
 
 
-def store_analysis(pair: Pair, encounter_id: str, photo_ids: list[str]) -> str:
-    """A finished analysis as gateway/jobs/runner.py stores it: the burn_analysis record and its files."""
+def store_analysis(pair: Pair, encounter_id: str, photo_ids: list[str], wound_id: str | None = None) -> str:
+    """A finished analysis (of the wound, when given) as gateway/jobs/runner.py stores it: the burn_analysis record
+    and its files."""
     job_id = uuid7()
     result = AnalysisResult(
         status=AnalysisStatus.ok,
@@ -92,6 +93,7 @@ def store_analysis(pair: Pair, encounter_id: str, photo_ids: list[str]) -> str:
         requested_at=now().isoformat(),
         completed_at=now().isoformat(),
         result=result,
+        wound_id=wound_id,
     )
     folder = folders.analysis_dir(pair.clinic_config, job_id)
     (folder / "surface").mkdir(parents=True)

@@ -178,9 +178,12 @@ def test_the_result_is_in_the_patients_record_and_its_files_download(uninterrupt
 def test_the_healing_track_links_the_analysis_and_shows_no_server_paths(uninterrupted, phone, gateway):
     finished, _, result = uninterrupted
     url = f"/api/v1/patients/{finished['patient_id']}/healing"
-    wait_for(lambda: phone.http.get(url).status_code == 200, 60, "the healing track")
+    # A patient with no wound recorded: the analysis sits in the section of analyses of no wound.
+    wait_for(lambda: (phone.http.get(url).json()["wounds"] or [{}])[0].get("track"), 60, "the healing track")
     response = phone.http.get(url)
-    [visit] = response.json()["sessions"]
+    [section] = response.json()["wounds"]
+    assert section["wound_id"] is None and finished["wound_id"] is None
+    [visit] = section["track"]["sessions"]
     assert visit["analysis"] == f"/api/v1/analyses/{finished['id']}" and visit["label"] == "day 0"
     assert visit["day"] == pytest.approx(result["hours_since_injury"] / 24, abs=0.01)  # the analysis and track agree
     assert str(gateway.db.parent) not in response.text and '"/tmp' not in response.text

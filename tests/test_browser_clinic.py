@@ -99,6 +99,16 @@ def test_the_clinicians_flow_end_to_end_and_the_consultants_advice_back(sites, b
     shot(page, "02-new-patient")
     page.get_by_role("button", name="Create patient").click()
     page.wait_for_url(re.compile(r"/patients/[0-9a-f-]+$"))
+    patient_url = page.url
+
+    # The burn as a wound, recorded on the patient page: its pictures and analysis are picked for it below.
+    page.locator("#wounds summary").click()
+    page.get_by_label("Short name").fill("chest")
+    page.get_by_label("Lund-Browder regions it covers").select_option(["trunk_anterior"])
+    page.get_by_label("Side").select_option("midline")
+    page.get_by_role("button", name="Record the wound").click()
+    page.wait_for_url(re.compile(r"/patients/[0-9a-f-]+#wound-[0-9a-f-]+$"))
+    assert "Wounds (1)" in page.inner_text("#wounds")
 
     page.get_by_role("link", name="New encounter").click()
     injured = (dt.datetime.now() - dt.timedelta(hours=2)).strftime("%Y-%m-%dT%H:%M")
@@ -142,9 +152,11 @@ def test_the_clinicians_flow_end_to_end_and_the_consultants_advice_back(sites, b
 
     tab(page, "Pictures")
     photos = sorted((phantom / "images").glob("*.jpg"))
+    page.get_by_label("Which wound").select_option(label="chest (open)")
     page.set_input_files("#files", [str(p) for p in photos])
     page.get_by_role("button", name="Upload").click()
     expect(page.locator(".thumbs li")).to_have_count(len(photos), timeout=120_000)
+    expect(page.locator(".thumbs li .badge-ok", has_text="chest")).to_have_count(len(photos))  # sent with tus
     poll(page, "Array.from(document.querySelectorAll('.thumbs img')).every(i => i.complete && i.naturalWidth > 0)")
     assert "ready" in page.inner_text("#readiness")
     shot(page, "05-pictures")
@@ -183,7 +195,8 @@ def test_the_clinicians_flow_end_to_end_and_the_consultants_advice_back(sites, b
 
     page.get_by_role("link", name=re.compile("Healing track")).click()
     page.wait_for_selector("#healing figure.plot svg")
-    assert "Area" in page.inner_text("#healing")
+    assert "Area" in page.inner_text("#healing") and "chest" in page.inner_text("#healing h3")
+    assert page.url.startswith(patient_url.split("#")[0])
     shot(page, "08-patient-healing")
 
     page.goto(encounter_url)

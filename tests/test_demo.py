@@ -40,6 +40,8 @@ def test_the_demo_uploads_analyses_and_aligns_four_visits_then_exits(tmp_path):
     assert run.returncode == 0, run.stderr[-4000:]
     out = run.stdout
     assert "%TBSA" in out and "Healing trend:" in out and "Decision support only" in out
+    shin = next(line for line in out.splitlines() if line.strip().startswith("left shin"))
+    assert "1 measured visit(s)" in shin and "beside the chart's" in shin
     # One story: the charted burn is the rendered forearm burn (about 18 cm2 of 1.85 m2), photographed 3 h after the
     # injury (provisional) though analysed three weeks later.
     assert "(Lund-Browder, superficial excluded): 0.1 %" in out and "formal resuscitation not indicated" in out
@@ -99,7 +101,10 @@ def _check_fhir(out: str, db, tmp_path) -> None:
                 for x in resources
                 if x["resourceType"] == "Observation" and x["code"]["coding"][0]["code"] == "72287-6"
             ]
-            assert len(sizes) == 4  # the four measured visits
+            assert len(sizes) == 5  # the forearm's four measured visits and the shin's one
+            wounds = {f"urn:uuid:{x['id']}": x for x in resources if x["resourceType"] == "Condition"}
+            focus = sorted(wounds[x["focus"][0]["reference"]]["code"]["text"] for x in sizes)
+            assert focus == ["Burn: left shin (left)"] + ["Burn: right forearm (right)"] * 4
             for panel in sizes:
                 job_id = panel["identifier"][0]["value"].split("/v")[0]
                 stored = http.get(f"/api/v1/analyses/{job_id}/result", headers=headers).json()["metrics"]
@@ -120,7 +125,7 @@ def _check_fhir(out: str, db, tmp_path) -> None:
                 )
                 ids = {f"urn:uuid:{x['id']}" for x in resources}
                 assert panel["derivedFrom"] and all(d["reference"] in ids for d in panel["derivedFrom"])
-            assert sum(x["status"] == "preliminary" for x in sizes) == 1  # day 0, 3 h after the injury
+            assert sum(x["status"] == "preliminary" for x in sizes) == 2  # day 0 (both wounds), 3 h after the injury
             files = [x["content"] for x in resources if x["resourceType"] == "Media"]
             files += [x["content"][0]["attachment"] for x in resources if x["resourceType"] == "DocumentReference"]
             for attachment in files[:1] + files[-2:]:  # a photo, the painted surface, the report
@@ -164,7 +169,11 @@ def _check_patient_page(out: str, db) -> None:
             page.wait_for_url(gateway.url + path)
             assert page.locator("section[aria-labelledby=encounters-heading] tbody tr").count() == 4
             assert page.locator("#healing figure.plot svg").count() >= 3
-            page.locator("model-viewer").scroll_into_view_if_needed()
+            assert page.locator("#healing article.wound-healing h3").all_inner_texts()[:2] == [
+                "right forearm (lower arm right posterior)",
+                "left shin (lower leg left anterior)",
+            ]
+            page.locator("model-viewer").first.scroll_into_view_if_needed()
             deadline = time.monotonic() + 90
             while not page.evaluate("document.querySelector('model-viewer').loaded === true"):
                 assert time.monotonic() < deadline, "the demo's 3D burn did not load"

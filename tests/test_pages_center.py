@@ -3,31 +3,72 @@ the clinic's record, 3D viewer, photos and report, advice written through the fo
 roles, CSRF and escaping.
 
 The case is real (tests/center_pair.py): a clinic gateway in this process records a patient, an encounter with a
-burn chart and a photo, and sends it with its own sync round over Zenoh on loopback to the center's own endpoint,
-also in this process. The record's history, ABCDE and decision support on the case page: test_pages_center_record.py.
+burn chart, two wounds and a photo, and sends it with its own sync round over Zenoh on loopback to the center's own
+endpoint, also in this process. The record's history, ABCDE and decision support on the case page: test_pages_center_record.py.
 """
 
 from __future__ import annotations
 
+import html as html_text
 import re
 from pathlib import Path
 
+import msgspec
 import pytest
 from litestar.testing import TestClient
 
 from center.app import create_central_app
-from harness.bodies import encounter_body, now, patient_body
+from gateway.transfers import service as transfers
+from harness.bodies import encounter_body, now, patient_body, wound_body
 from harness.sites import noise_photo
+from schemas.transfer import CaseSummary, CaseWound
+from schemas.wound_healing import BodyShare
 from tests.center_pair import SURFACE, Pair, center_pair, store_analysis
 from tests.pages_helpers import post_form, sign_in
 
 NAME = "<script>alert(1)</script>"
+ARM, THIGH = "left upper arm", "right thigh"
+FLAG = (
+    "The burn chart records no burn in the wound's regions, but 0.10 %TBSA was measured there: check the chart and "
+    "the wound's regions."
+)
+
+
+def _with_a_measured_arm(real):
+    """healing.json as the clinic sends it once the arm has a measured visit: the track behind it needs a 3D
+    reconstruction, so its share is given here (the arm is not on the chart: the clinic's check flags it)."""
+
+    def patient_healing(db, config, patient_id, wounds):
+        healing = real(db, config, patient_id, wounds)
+        share = BodyShare(
+            measured_percent=0.1,
+            measured_area_cm2=18.4,
+            measured_by="/api/v1/analyses/arm",
+            measured_day=0.0,
+            charted_percent=0.0,
+            regions_percent=2.0,
+            charted_by="burn_chart of this encounter",
+            flag=FLAG,
+        )
+        sections = [msgspec.structs.replace(w, share=share) if w.label == ARM else w for w in healing.wounds]
+        return msgspec.structs.replace(healing, wounds=sections)
+
+    return patient_healing
 
 
 def _record_case(pair: Pair, folder: Path) -> None:
     api = pair.api
     patient = api.post("/api/v1/patients", patient_body(given_name=NAME), "patient")
-    encounter_id = api.post("/api/v1/encounters", encounter_body(patient["meta"]["id"]), "encounter")["meta"]["id"]
+    patient_id = patient["meta"]["id"]
+    encounter_id = api.post("/api/v1/encounters", encounter_body(patient_id), "encounter")["meta"]["id"]
+    arm, thigh = (
+        api.post(
+            f"/api/v1/patients/{patient_id}/wounds",
+            wound_body(patient_id, label=label, regions=[region], side=side),
+            "wound",
+        )
+        for label, region, side in ((ARM, "upper_arm_left_anterior", "left"), (THIGH, "thigh_right_anterior", "right"))
+    )
     chart = {
         "encounter_id": encounter_id,
         "assessed_at": now().isoformat(),
@@ -39,8 +80,10 @@ def _record_case(pair: Pair, folder: Path) -> None:
     r = api.http.put(f"/api/v1/encounters/{encounter_id}/burn-chart", json=chart, headers={"If-None-Match": "*"})
     assert r.status_code == 201, r.text
     photo = api.upload(noise_photo(folder / "photo.jpg", 1, size=(640, 480)), encounter_id)
-    store_analysis(pair, encounter_id, [photo["asset"]["id"]])
-    pair.send(encounter_id)
+    store_analysis(pair, encounter_id, [photo["asset"]["id"]], wound_id=arm["meta"]["id"])
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(transfers, "patient_healing", _with_a_measured_arm(transfers.patient_healing))
+        pair.send(encounter_id)
 
 
 @pytest.fixture(scope="module")
@@ -103,6 +146,26 @@ def test_the_case_page_shows_the_record_the_viewer_photos_report_and_versions(pa
     report = re.search(rf'href="({re.escape(pair.parts_url)}report\.pdf)"', html)
     assert report and consultant.get(report.group(1)).content.startswith(b"%PDF")
     assert "<strong>Version 1</strong> (this one)" in html
+
+
+def test_each_wound_is_summarised_and_shown_with_its_analyses_area_and_share_of_the_body(pair, consultant):
+    detail = consultant.get(f"/api/v1/cases/clinic-test/{pair.bundle_id}").json()
+    summary = msgspec.convert(detail["manifest"]["summary"], CaseSummary)
+    assert [(w.label, w.regions, w.state, w.analyses, w.area_cm2) for w in summary.wounds] == [
+        (ARM, ["upper_arm_left_anterior"], "open", 1, 18.4),
+        (THIGH, ["thigh_right_anterior"], "open", 0, None),
+    ]
+    assert all(isinstance(w, CaseWound) for w in summary.wounds)
+    page = html_text.unescape(consultant.get(pair.case_url).text)
+    wounds = page.split('id="wounds"', 1)[1].split("</section>", 1)[0]
+    arm, thigh = wounds.split('<article class="wound"')[1:]
+    assert f"<h3>{ARM}</h3>" in arm and "Left upper arm, front (left)" in arm and "<dd>open</dd>" in arm
+    assert "1 in this encounter" in arm and "18.4 cm²" in arm
+    assert "0.10 %TBSA (18.4 cm² on day 0; the wound's latest measured area (3D, cm2)" in arm
+    assert "0.00 %TBSA of the wound's regions (2.00 %TBSA in all); the burn chart's Lund-Browder estimate" in arm
+    assert "Check: The burn chart records no burn in the wound's regions, but 0.10 %TBSA was measured there" in arm
+    assert f"<h3>{THIGH}</h3>" in thigh and "Right thigh, front (right)" in thigh and "0 in this encounter" in thigh
+    assert "<dd>—</dd>" in thigh and "No measured visit in cm² yet" in thigh and "%TBSA" not in thigh
 
 
 def test_a_patient_name_with_markup_is_shown_as_text(pair, consultant):

@@ -18,10 +18,12 @@ from sync.bundle import PartData
 from tests.center_pair import center_pair
 from tests.center_record import NEWER_INTAKE_FIELDS, act, encounter, full_record
 
+WOUND_PARTS = ("wounds.json", "healing.json")
+
 
 def _as_an_older_clinic(real):
     """The snapshot an older clinic version would send: no decision support, an intake without the newer tetanus
-    fields (the record.json of that version)."""
+    fields (the record.json of that version), no wounds or their healing."""
 
     def snapshot(conn, config, encounter_id, extra=()):
         snap = real(conn, config, encounter_id, extra)
@@ -31,7 +33,7 @@ def _as_an_older_clinic(real):
         parts[RecordKind.intake] = msgspec.structs.replace(intake, data=older)
         record = msgspec.structs.replace(snap.record, parts=parts)
         encoded = PartData("record.json", msgspec.json.encode(record))
-        files = [encoded if p.name == "record.json" else p for p in snap.parts]
+        files = [encoded if p.name == "record.json" else p for p in snap.parts if p.name not in WOUND_PARTS]
         return case_snapshot.Snapshot(record=record, analyses=snap.analyses, parts=files)
 
     return snapshot
@@ -143,3 +145,5 @@ def test_a_bundle_from_an_older_clinic_version_shows_and_says_what_it_did_not_se
     assert re.search(r"Not sent by this clinic's version: intake: tetanus doses; intake: last tetanus dose", history)
     support = _panel(page, "decision-support")
     assert "No decision support in this case: not sent by this clinic's version." in support
+    assert 'id="wounds"' not in page  # sent before wounds were kept: nothing said of them
+    assert "No wounds recorded at the clinic." in _panel(sent[0]["full"], "wounds")

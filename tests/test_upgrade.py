@@ -59,6 +59,10 @@ def assert_kept(before: Snapshot, after: Snapshot) -> None:
     for table, (columns, old_rows) in before.items():
         if table == "sqlite_master":
             continue
+        if table == "sqlite_sequence":  # AUTOINCREMENT counters: a migration that writes rows moves them on
+            counters = {name: seq for name, seq in after[table][1]}
+            assert all(counters.get(name, -1) >= seq for name, seq in old_rows), "a sequence went back"
+            continue
         assert table in after, f"table {table} is gone"
         new_columns, new_rows = after[table]
         lost = [c for c in columns if c not in new_columns]
@@ -157,7 +161,8 @@ def check_gateway_serves(db_path: Path, before: Snapshot, name: str) -> None:
     )
     assert verified.returncode == 0, verified.stdout + verified.stderr
     result = json.loads(verified.stdout)
-    assert result["ok"] and result["entries"] == len(rows(before, "audit_log")), result
+    upgrade_wounds = check_one_wound_per_patient_with_analyses(db_path, before)
+    assert result["ok"] and result["entries"] == len(rows(before, "audit_log")) + len(upgrade_wounds), result
 
     config = Config(gateway=GatewayConfig(database=str(db_path)), security=FAST_SECURITY)
     with TestClient(create_app(config)) as client:
@@ -174,7 +179,12 @@ def check_gateway_serves(db_path: Path, before: Snapshot, name: str) -> None:
             if not page["has_more"]:
                 break
         served = {(c["meta"]["kind"], c["meta"]["id"], c["meta"]["version"]): c for c in fed}
-        assert len(served) == len(versions)
+        assert len(served) == len(versions) + len(upgrade_wounds)
+        for wound_id, patient_id in upgrade_wounds.items():
+            wound = client.get(f"/api/v1/wounds/{wound_id}", headers=clin).json()
+            assert wound["data"]["patient_id"] == patient_id and served[("wound", wound_id, 1)]
+            healing = client.get(f"/api/v1/patients/{patient_id}/healing", headers=clin).json()
+            assert [w["wound_id"] for w in healing["wounds"]] == [wound_id], healing
         for v in versions:
             got = served[(v["kind"], v["id"], v["version"])]
             assert got["data"] == json.loads(v["data"]) and got["meta"]["seq"] == v["seq"]
@@ -211,6 +221,30 @@ def check_gateway_serves(db_path: Path, before: Snapshot, name: str) -> None:
         assert len(audit) > len(old_chain) and audit[len(old_chain)]["prev_hash"] == old_chain[-1]["hash"]
         assert client.get("/api/v1/admin/audit/verify", headers=admin).json()["ok"]
     assert file_hashes(db_path.parent / "burnedge-media") == file_hashes(FIXTURES / name / "burnedge-media")
+
+
+def check_one_wound_per_patient_with_analyses(db_path: Path, before: Snapshot) -> dict[str, str]:
+    """The upgrade gave each patient with analyses one wound holding all of them and their encounters' pictures,
+    and no other patient a wound. Returns wound id -> patient id."""
+    conn = sqlite3.connect(f"file:{db_path}?mode=ro", uri=True)
+    conn.row_factory = sqlite3.Row
+    try:
+        wounds = {
+            r["id"]: r["parent_id"]
+            for r in conn.execute("SELECT id, parent_id FROM record_heads WHERE kind = 'wound'").fetchall()
+        }
+        jobs = conn.execute("SELECT id, patient_id, encounter_id, wound_id FROM analysis_jobs").fetchall()
+        assets = conn.execute("SELECT encounter_id, wound_id FROM assets").fetchall()
+    finally:
+        conn.close()
+    patients = {j["patient_id"] for j in rows(before, "analysis_jobs")}
+    assert sorted(wounds.values()) == sorted(patients), "one wound per patient with analyses, and only them"
+    for job in jobs:
+        assert wounds[job["wound_id"]] == job["patient_id"], f"job {job['id']} is not in its patient's wound"
+    analysed = {j["encounter_id"]: j["wound_id"] for j in jobs}
+    for asset in assets:
+        assert asset["wound_id"] == analysed.get(asset["encounter_id"]), "a picture is not in its wound"
+    return wounds
 
 
 CENTER_STORES = ["burnedge-central-store", "burnedge-central-keys"]

@@ -4,9 +4,8 @@ from __future__ import annotations
 
 import pytest
 
-from harness.bodies import encounter_body, patient_body
+from harness.bodies import encounter_body, patient_body, wound_body
 from schemas.ids import uuid7
-from tests.test_wounds_api import wound_body
 
 
 @pytest.fixture

@@ -48,6 +48,7 @@ def _asset(row: sqlite3.Row) -> Asset:
         created_at=row["created_at"],
         created_by=row["created_by"],
         device_id=row["device_id"],
+        wound_id=row["wound_id"],
     )
 
 
@@ -75,7 +76,7 @@ def insert_asset(conn: sqlite3.Connection, asset: Asset) -> None:
     """Write a new asset row, inside the caller's transaction."""
     conn.execute(
         "INSERT INTO assets (id, encounter_id, kind, media_type, sha256, size_bytes, filename, metadata, verdict,"
-        " source_asset_id, created_at, created_by, device_id) VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?)",
+        " source_asset_id, created_at, created_by, device_id, wound_id) VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?)",
         (
             asset.id,
             asset.encounter_id,
@@ -90,8 +91,14 @@ def insert_asset(conn: sqlite3.Connection, asset: Asset) -> None:
             asset.created_at,
             asset.created_by,
             asset.device_id,
+            asset.wound_id,
         ),
     )
+
+
+def set_asset_wound(conn: sqlite3.Connection, asset_id: str, wound_id: str | None) -> None:
+    """Say which wound a picture (and the frames taken from it) shows, inside the caller's transaction."""
+    conn.execute("UPDATE assets SET wound_id = ? WHERE id = ? OR source_asset_id = ?", (wound_id, asset_id, asset_id))
 
 
 # frames of videos --------------------------------------------------------------------------

@@ -1,6 +1,6 @@
 """What the case page shows, read from the bundle the clinic sent: the record (record_view.py: history, ABCDE,
-mechanism, the burn chart, decision support), the patient, each analysis with its painted surface, the photos
-and the report."""
+mechanism, the burn chart, decision support), the patient, its wounds (wound_view.py), each analysis with its
+painted surface, the photos and the report."""
 
 from __future__ import annotations
 
@@ -10,6 +10,7 @@ import msgspec
 
 from base.web.pages.rendering import patient_name
 from center.pages.record_view import RecordView, record_view
+from center.pages.wound_view import HEALING_PART, WOUNDS_PART, WoundsView, wounds_view
 from schemas.central import CaseDetail
 from schemas.clinical_results import Assessment
 from schemas.jobs import BurnAnalysis
@@ -35,6 +36,8 @@ class CaseView:
     analyses: list[AnalysisView]
     photo_parts: list[str]
     report_part: str | None
+    wounds: WoundsView | None = None
+    """None for a bundle sent before wounds were kept."""
 
     @property
     def patient_name(self) -> str:
@@ -75,4 +78,9 @@ def case_view(services, who, site_id: str, bundle_id: str) -> CaseView:
         analyses=analyses,
         photo_parts=[n for n in names if n.startswith("photos/")],
         report_part="report.pdf" if "report.pdf" in names else None,
+        wounds=wounds_view(
+            detail.manifest.summary, part(WOUNDS_PART), part(HEALING_PART) if HEALING_PART in names else None
+        )
+        if WOUNDS_PART in names
+        else None,
     )

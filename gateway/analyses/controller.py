@@ -17,7 +17,6 @@ from base.web.site import AuthedRequest
 from gateway.dependencies import ServicesDep
 from schemas.analysis import AnalysisResult
 from schemas.jobs import FINISHED, AnalysisJob, AnalysisRequest, JobAttempt, JobEvent
-from schemas.longitudinal import TrackResult
 
 EVENT_POLL_S = 0.5
 KEEPALIVE_S = 15.0
@@ -151,12 +150,3 @@ class AnalysisController(Controller):
     def artifact(self, job_id: IdPath, name: FromPath[str], request: AuthedRequest, services: ServicesDep) -> File:
         path = services.analyses.artifact(request.user, job_id, name.lstrip("/"))
         return File(path=path, filename=path.name)
-
-    @get(
-        "/patients/{patient_id:str}/healing",
-        sync_to_thread=True,
-        summary="Healing over time: every measured visit aligned with the first, area change, rate, projection",
-        responses=problems(*ONE),
-    )
-    def healing(self, patient_id: IdPath, request: AuthedRequest, services: ServicesDep) -> TrackResult:
-        return services.analyses.healing(request.user, patient_id)

@@ -17,18 +17,18 @@ from base.storage import assets as asset_rows
 from base.storage import audit
 from base.storage import records as store
 from gateway.capture.assets import AssetService
-from gateway.jobs import folders, timeline
+from gateway.jobs import folders
 from gateway.jobs.capture_time import capture_time
 from gateway.jobs.queue import JobQueue
 from gateway.records.validation import require_live_encounter
 from gateway.storage.database import Database
+from gateway.wounds.choice import wound_of_analysis
 from processing.stages import code_digest
 from schemas.analysis import AnalysisResult
 from schemas.capture import Asset, AssetKind, MediaType
 from schemas.config import Config
 from schemas.errors import Conflict, InvalidInput
 from schemas.jobs import AnalysisJob, AnalysisRequest, BurnAnalysis, JobAttempt, JobInputs, JobState, PictureRef
-from schemas.longitudinal import TrackResult
 from schemas.records import RecordKind
 
 SUFFIX = {MediaType.jpeg: ".jpg", MediaType.png: ".png", MediaType.heic: ".heic"}
@@ -47,7 +47,9 @@ class AnalysisService:
         require_capture(principal)
         with self.db.read() as conn:
             encounter = require_live_encounter(conn, encounter_id)
-        pictures = self._pictures(principal, encounter_id, body)
+            wound = wound_of_analysis(conn, encounter.value().patient_id, body.wound_id)
+        wound_id = wound.meta.id if wound is not None else None
+        pictures = self._pictures(principal, encounter_id, body, wound_id)
         by_id = {p.id: p for p in pictures}
         for mask in body.masks:
             _check_mask(mask, by_id)
@@ -70,7 +72,7 @@ class AnalysisService:
             encounter.data.get("weight_kg"),
             encounter.data.get("time_of_injury"),
         ]
-        digest = _digest(self.config, refs, body, record)
+        digest = _digest(self.config, refs, body, record, wound_id)
         captured = capture_time(pictures, visit.time_of_injury, self.config.analysis)
         # The queue stamps requested_at when it queues the job.
         inputs = JobInputs(
@@ -87,6 +89,7 @@ class AnalysisService:
                 mode=visit.mode,
                 created_by=principal.username,
                 user_id=principal.user_id,
+                wound_id=wound_id,
             )
             if created:
                 audit.append(
@@ -96,12 +99,16 @@ class AnalysisService:
                     device_id=principal.device_id,
                     kind="analysis_job",
                     record_id=job_id,
-                    detail=json.dumps({"encounter": encounter_id, "pictures": len(refs)}),
+                    detail=json.dumps({"encounter": encounter_id, "wound": wound_id, "pictures": len(refs)}),
                 )
         return self.queue.get(job_id), created
 
-    def _pictures(self, principal: Principal, encounter_id: str, body: AnalysisRequest) -> list[Asset]:
+    def _pictures(
+        self, principal: Principal, encounter_id: str, body: AnalysisRequest, wound_id: str | None
+    ) -> list[Asset]:
         stored = self.assets.for_encounter(principal, encounter_id)
+        if body.assets is None and wound_id is not None:
+            stored = _of_wound(stored, wound_id)
         pending = [a.filename for a in stored if a.kind is AssetKind.video and not _frames_done(self.db, a.id)]
         if body.assets is None:
             if pending:
@@ -177,10 +184,13 @@ class AnalysisService:
         self.get(principal, job_id)
         return folders.artifact_file(self.config, job_id, name)
 
-    def healing(self, principal: Principal, patient_id: str) -> TrackResult:
-        require_read(principal, RecordKind.burn_analysis)
-        store.get_head(self.db.connection(), RecordKind.patient, patient_id)
-        return timeline.read_track(self.config, patient_id)
+
+def _of_wound(stored: list[Asset], wound_id: str) -> list[Asset]:
+    """The wound's pictures; when none is marked with any wound (one wound, pictures sent before it was recorded or
+    without saying), every picture of the encounter."""
+    if all(a.wound_id is None for a in stored):
+        return stored
+    return [a for a in stored if a.wound_id == wound_id]
 
 
 def _frames_done(db: Database, video_id: str) -> bool:
@@ -215,9 +225,9 @@ def _check_mask(mask, pictures: dict[str, Asset]) -> None:
         )
 
 
-def _digest(config: Config, refs: list[PictureRef], body: AnalysisRequest, record: list) -> str:
+def _digest(config: Config, refs: list[PictureRef], body: AnalysisRequest, record: list, wound_id: str | None) -> str:
     """What makes two requests the same analysis: the pictures' bytes, masks, ruler, the record's figures it
-    uses, settings and code."""
+    uses, the wound, settings and code. (No wound adds nothing, so a request of before wounds keeps its digest.)"""
     settings = [
         msgspec.to_builtins(config.quality),
         msgspec.to_builtins(config.reconstruction),
@@ -232,4 +242,6 @@ def _digest(config: Config, refs: list[PictureRef], body: AnalysisRequest, recor
         settings,
         code_digest(),
     ]
+    if wound_id is not None:
+        parts.append(wound_id)
     return hashlib.sha256(json.dumps(parts, sort_keys=True).encode()).hexdigest()

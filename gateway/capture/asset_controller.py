@@ -2,14 +2,16 @@
 
 from __future__ import annotations
 
-from litestar import Controller, get
+from litestar import Controller, get, put
+from litestar.params import JSONBody
 from litestar.response import File
 
 from base.web.paths import IdPath
-from base.web.problems import ONE, problems
+from base.web.problems import BODY, ONE, SESSION, problems
 from base.web.site import AuthedRequest
 from gateway.dependencies import ServicesDep
 from schemas.capture import Asset, CaptureReadiness
+from schemas.wound import AssetWound
 
 
 class AssetController(Controller):
@@ -24,6 +26,17 @@ class AssetController(Controller):
     )
     def read(self, asset_id: IdPath, request: AuthedRequest, services: ServicesDep) -> Asset:
         return services.assets.get(request.user, asset_id)
+
+    @put(
+        "/assets/{asset_id:str}/wound",
+        sync_to_thread=True,
+        summary="Say which wound a picture shows (a video's frames follow it); null for none in particular",
+        responses=problems(*BODY, *SESSION, 404, 422),
+    )
+    def set_wound(
+        self, asset_id: IdPath, data: JSONBody[AssetWound], request: AuthedRequest, services: ServicesDep
+    ) -> Asset:
+        return services.assets.set_wound(request.user, asset_id, data.wound_id)
 
     @get(
         "/assets/{asset_id:str}/file",

@@ -10,7 +10,7 @@ import os
 import sqlite3
 from pathlib import Path
 
-from base.accounts.permissions import Principal, require_read
+from base.accounts.permissions import Principal, require_capture, require_read
 from base.storage import assets as asset_rows
 from base.storage import audit
 from base.storage.blobs import MediaStore, sha256_of
@@ -18,6 +18,7 @@ from base.storage.records import get_head
 from gateway.records.validation import require_live_encounter
 from gateway.storage import uploads as upload_rows
 from gateway.storage.database import Database
+from gateway.wounds.choice import wound_of_patient
 from processing.capture.media import check_photo, check_video, sniff
 from processing.capture.quality import gate_bytes
 from processing.capture.readiness import View
@@ -43,6 +44,7 @@ class AssetService:
         *,
         upload_id: str | None = None,
         expected: str | None = None,
+        wound_id: str | None = None,
     ) -> Asset:
         """Check a finished upload and keep it; the same bytes for the same encounter give the same asset.
 
@@ -88,6 +90,7 @@ class AssetService:
                 verdict,
                 None,
                 upload_id=upload_id,
+                wound_id=wound_id,
             )
         except BaseException:
             if new_blob:
@@ -108,11 +111,25 @@ class AssetService:
         source_asset_id: str | None,
         *,
         upload_id: str | None = None,
+        wound_id: str | None = None,
     ) -> Asset:
         with self.db.write() as conn:
-            require_live_encounter(conn, encounter_id)
+            encounter = require_live_encounter(conn, encounter_id)
+            if wound_id is not None:
+                wound_of_patient(conn, encounter.value().patient_id, wound_id, "Upload-Metadata wound_id")
             asset_id = insert_asset_row(
-                conn, principal, encounter_id, kind, media_type, sha, size, filename, metadata, verdict, source_asset_id
+                conn,
+                principal,
+                encounter_id,
+                kind,
+                media_type,
+                sha,
+                size,
+                filename,
+                metadata,
+                verdict,
+                source_asset_id,
+                wound_id=wound_id,
             )
             if upload_id is not None:
                 upload_rows.mark_upload_complete(conn, upload_id, asset_id)
@@ -121,6 +138,29 @@ class AssetService:
     def get(self, principal: Principal, asset_id: str) -> Asset:
         require_read(principal, RecordKind.encounter)
         return asset_rows.get_asset(self.db.connection(), asset_id)
+
+    def set_wound(self, principal: Principal, asset_id: str, wound_id: str | None) -> Asset:
+        """Say which wound a picture shows (a video's frames follow it); None says no wound in particular."""
+        require_capture(principal)
+        with self.db.write() as conn:
+            asset = asset_rows.get_asset(conn, asset_id)
+            encounter = require_live_encounter(conn, asset.encounter_id)
+            if asset.source_asset_id is not None:
+                raise InvalidInput(f"{asset.filename} is a frame of a video: set the wound of the video instead")
+            if wound_id is not None:
+                wound_of_patient(conn, encounter.value().patient_id, wound_id, "$.wound_id")
+            if asset.wound_id != wound_id:
+                asset_rows.set_asset_wound(conn, asset_id, wound_id)
+                audit.append(
+                    conn,
+                    action="asset.wound",
+                    user_id=principal.user_id,
+                    device_id=principal.device_id,
+                    kind="asset",
+                    record_id=asset_id,
+                    detail=json.dumps({"from": asset.wound_id, "to": wound_id}),
+                )
+            return asset_rows.get_asset(conn, asset_id)
 
     def for_encounter(self, principal: Principal, encounter_id: str) -> list[Asset]:
         require_read(principal, RecordKind.encounter)
@@ -173,14 +213,18 @@ def insert_asset_row(
     metadata: CaptureMetadata,
     verdict: QualityVerdict | None,
     source_asset_id: str | None,
+    *,
+    wound_id: str | None = None,
 ) -> str:
     """One asset row and its audit entry, inside the caller's transaction; returns its id.
 
     The same bytes already stored for this encounter (a retry, two uploads finishing together,
-    a frame identical to a photo) keep their existing asset.
+    a frame identical to a photo) keep their existing asset (which takes the wound if it had none).
     """
     existing = asset_rows.asset_id_with_bytes(conn, encounter_id, sha)
     if existing is not None:
+        if wound_id is not None and asset_rows.get_asset(conn, existing).wound_id is None:
+            asset_rows.set_asset_wound(conn, existing, wound_id)
         return existing
     asset = Asset(
         id=uuid7(),
@@ -196,6 +240,7 @@ def insert_asset_row(
         created_at=iso(utcnow()),
         created_by=principal.username,
         device_id=principal.device_id,
+        wound_id=wound_id,
     )
     asset_rows.insert_asset(conn, asset)
     audit.append(
@@ -205,6 +250,6 @@ def insert_asset_row(
         device_id=principal.device_id,
         kind="asset",
         record_id=asset.id,
-        detail=json.dumps({"sha256": sha, "encounter": encounter_id}),
+        detail=json.dumps({"sha256": sha, "encounter": encounter_id, "wound": wound_id}),
     )
     return asset.id

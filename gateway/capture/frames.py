@@ -137,4 +137,5 @@ def _insert_frame(conn: sqlite3.Connection, video: Asset, sha: str, frame: Extra
         metadata,
         verdict,
         video.id,
+        wound_id=video.wound_id,
     )

@@ -26,6 +26,7 @@ from gateway.capture.assets import AssetService
 from gateway.records.validation import require_live_encounter
 from gateway.storage import uploads as upload_rows
 from gateway.storage.database import Database
+from gateway.wounds.choice import wound_of_patient
 from schemas.base import iso, utcnow
 from schemas.capture import Asset, StoredUpload, UploadPhase
 from schemas.config import Config
@@ -102,7 +103,9 @@ class UploadService:
         filename = check_filename(next((metadata[k] for k in FILENAME_KEYS if metadata.get(k)), ""))
         upload_id, now = uuid7(), utcnow()
         with self.db.write() as conn:
-            require_live_encounter(conn, encounter_id)
+            encounter = require_live_encounter(conn, encounter_id)
+            if metadata.get("wound_id"):
+                wound_of_patient(conn, encounter.value().patient_id, metadata["wound_id"], "Upload-Metadata wound_id")
             open_uploads = upload_rows.open_uploads(conn)
             if sum(u.created_by == principal.user_id for u in open_uploads) >= limits.max_open_per_user:
                 raise TooManyAttempts(
@@ -176,6 +179,7 @@ class UploadService:
                 row.filename,
                 upload_id=upload_id,
                 expected=row.metadata.get("checksum"),
+                wound_id=row.metadata.get("wound_id") or None,
             )
         except StorageError:
             raise  # the database was busy: the file stays, and housekeeping completes it later

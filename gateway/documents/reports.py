@@ -20,17 +20,19 @@ from base.storage import audit
 from base.storage import records as store
 from base.storage.durable import fsync_dir, replace_atomically
 from gateway.records import assessments, decision_support
+from gateway.storage import jobs
+from gateway.wounds.healing import patient_healing
 from processing.report.document import render
 from processing.report.inputs import REPORT_FORMAT, versions_digest
 from processing.snapshot import AnalysisVisit, EncounterSnapshot
 from schemas.audit import AuditHead
-from schemas.base import utcnow
+from schemas.base import iso, utcnow
 from schemas.clinical_results import FluidPhase, FluidPlan
 from schemas.config import Config
 from schemas.errors import Conflict
 from schemas.ids import uuid7
 from schemas.jobs import BurnAnalysis
-from schemas.records import RecordKind
+from schemas.records import Record, RecordKind
 
 REPORT_KINDS = (RecordKind.encounter, RecordKind.patient, RecordKind.burn_analysis, RecordKind.consultation)
 
@@ -45,24 +47,40 @@ class MadeReport:
     """False when the stored report of the same versions was served."""
 
 
-def _visits(conn: sqlite3.Connection, config: Config, patient_id: str, encounter_id: str) -> list[AnalysisVisit]:
-    """Each of the patient's encounters' latest finished analysis, in the order the photos were taken."""
+def _visits(
+    conn: sqlite3.Connection, config: Config, patient_id: str, encounter_id: str, labels: dict[str, str]
+) -> list[AnalysisVisit]:
+    """The latest finished analysis of each wound at each of the patient's encounters, in the order the photos were
+    taken."""
     pages = []
     for encounter in store.list_heads(conn, RecordKind.encounter, parent_id=patient_id, limit=None):
         if encounter.meta.deleted:
             continue
+        latest: dict[str | None, Record] = {}
         heads = store.list_heads(conn, RecordKind.burn_analysis, parent_id=encounter.meta.id, limit=None)
-        if not heads:
-            continue
-        latest = max(heads, key=lambda r: r.data["completed_at"])
-        analysis = decision_support.versioned(latest)
-        value: BurnAnalysis = analysis.value
-        taken = value.captured.at if value.captured else encounter.data["time_of_arrival"]
-        day = value.result.hours_since_injury / 24 if value.result.hours_since_injury is not None else None
-        here = "this encounter" if encounter.meta.id == encounter_id else "visit"
-        label = f"{here}, photos {taken[:16].replace('T', ' ')}" + (f", day {day:.0f} after injury" if day else "")
-        pages.append(AnalysisVisit(analysis, analysis_dir(config, value.job_id), label, day))
+        for head in sorted(heads, key=lambda r: r.value().completed_at):
+            latest[_wound_of(conn, head)] = head
+        for wound_id, head in latest.items():
+            analysis = decision_support.versioned(head)
+            value: BurnAnalysis = analysis.value
+            taken = value.captured.at if value.captured else iso(encounter.value().time_of_arrival)
+            day = value.result.hours_since_injury / 24 if value.result.hours_since_injury is not None else None
+            here = "this encounter" if encounter.meta.id == encounter_id else "visit"
+            wound = labels.get(wound_id or "", "")
+            label = f"{wound + ', ' if wound else ''}{here}, photos {taken[:16].replace('T', ' ')}"
+            label += f", day {day:.0f} after injury" if day else ""
+            folder = analysis_dir(config, value.job_id)
+            pages.append(AnalysisVisit(analysis, folder, label, day, wound_id=wound_id, wound=wound))
     return sorted(pages, key=lambda p: (p.day is None, p.day or 0.0, p.visit))
+
+
+def _wound_of(conn: sqlite3.Connection, analysis: Record) -> str | None:
+    """The wound the analysis measured: its own field, else its job's (the upgrade gave older jobs one)."""
+    wound_id = analysis.value().wound_id
+    if wound_id is None:
+        job = jobs.find(conn, analysis.meta.id)
+        wound_id = job.wound_id if job is not None else None
+    return wound_id
 
 
 def _fluids_now(conn: sqlite3.Connection, config: Config, encounter_id: str, now: dt.datetime) -> FluidPlan | None:
@@ -129,6 +147,9 @@ class ReportService:
         head = store.find_head(conn, RecordKind.decision_support, encounter_id)
         consultations = store.list_heads(conn, RecordKind.consultation, parent_id=encounter_id, limit=None)
         chain = audit.head(conn)
+        patient_id = gathered.patient.value.id
+        wound_heads = [w for w in store.list_heads(conn, RecordKind.wound, parent_id=patient_id, limit=None)]
+        wounds = [decision_support.versioned(w) for w in wound_heads if not w.meta.deleted]
         return EncounterSnapshot(
             report_id=uuid7(),
             made_at=now,
@@ -146,8 +167,9 @@ class ReportService:
             assessment=gathered.assessment,
             fluids_now=_fluids_now(conn, self.config, encounter_id, now) if gathered.assessment else None,
             decision_support=decision_support.versioned(head) if head else None,
-            analyses=_visits(conn, self.config, gathered.patient.value.id, encounter_id),
-            track=gathered.track,
+            wounds=wounds,
+            analyses=_visits(conn, self.config, patient_id, encounter_id, {w.ref.id: w.value.label for w in wounds}),
+            healing=patient_healing(self.db, self.config, patient_id, wound_heads).wounds,
             consultations=[decision_support.versioned(c) for c in consultations if not c.meta.deleted],
             audit_head=AuditHead(seq=chain.seq, hash=chain.hash) if chain else None,
         )

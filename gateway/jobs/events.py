@@ -25,6 +25,8 @@ class AnalysisStored(msgspec.Struct, frozen=True, kw_only=True):
     job_id: str
     encounter_id: str
     patient_id: str
+    wound_id: str | None = None
+    """The wound measured; None for a patient with no wound recorded."""
 
 
 Reaction = Callable[[Database, Config, AnalysisStored], None]

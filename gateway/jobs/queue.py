@@ -81,6 +81,7 @@ class JobQueue:
         mode: EncounterMode,
         created_by: str,
         user_id: str,
+        wound_id: str | None = None,
     ) -> tuple[str, bool]:
         """`enqueue_in` in a transaction of its own."""
         with self.db.write() as conn:
@@ -93,6 +94,7 @@ class JobQueue:
                 mode=mode,
                 created_by=created_by,
                 user_id=user_id,
+                wound_id=wound_id,
             )
 
     def enqueue_in(
@@ -106,6 +108,7 @@ class JobQueue:
         mode: EncounterMode,
         created_by: str,
         user_id: str,
+        wound_id: str | None = None,
     ) -> tuple[str, bool]:
         """Queue an analysis of the encounter inside the caller's transaction, once: while a job of the same
         inputs (`input_digest`) is queued, running or done, that job is the answer. An emergency runs before
@@ -132,6 +135,7 @@ class JobQueue:
             user_id=user_id,
             message="waiting for a worker",
             captured=inputs.captured,
+            wound_id=wound_id,
         )
         jobs.insert(conn, job, msgspec.structs.replace(inputs, requested_at=now))
         return job.id, True
@@ -351,4 +355,5 @@ def analysis_job(job: StoredJob, position: int | None = None, history: list[str]
         result_status=job.result_status,
         history=history or [],
         captured=job.captured,
+        wound_id=job.wound_id,
     )

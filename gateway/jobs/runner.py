@@ -85,7 +85,9 @@ def run(config: Config, claim: Claim, reactions: Sequence[Reaction] = ()) -> Job
         )
         state = _store(db, queue, claim, job, inputs, result)
         if state is JobState.done:
-            event = AnalysisStored(job_id=claim.job_id, encounter_id=job.encounter_id, patient_id=job.patient_id)
+            event = AnalysisStored(
+                job_id=claim.job_id, encounter_id=job.encounter_id, patient_id=job.patient_id, wound_id=job.wound_id
+            )
             publish(reactions, db, config, event)
         return state
     finally:
@@ -174,6 +176,7 @@ def _store(
             completed_at=now,
             captured=inputs.captured,
             result=result,
+            wound_id=job.wound_id,
         )
         audit.insert_server_record(
             conn,

@@ -1,6 +1,8 @@
-"""A patient's healing track: every encounter's latest measured analysis, aligned with the first.
+"""A wound's healing track: every encounter's latest measured analysis of that wound, aligned with the first.
 
-Recomputed by the worker after each analysis of the patient finishes (registrations already made are cached
+Each wound has its own track (WORK/patients/<patient>/wounds/<wound>/track.json); analyses made for a patient with
+no wound recorded share the patient's own (WORK/patients/<patient>/track.json), as every analysis did before wounds
+were kept. Recomputed by the worker after each analysis of the wound finishes (registrations already made are cached
 on disk, so only the new visit is registered); the API serves the stored track.json.
 """
 
@@ -8,6 +10,7 @@ from __future__ import annotations
 
 import datetime as dt
 import logging
+import sqlite3
 from pathlib import Path
 
 import msgspec
@@ -17,7 +20,6 @@ from gateway.jobs import folders
 from gateway.storage import jobs
 from gateway.storage.database import Database
 from schemas.config import Config
-from schemas.errors import NotFound
 from schemas.longitudinal import TrackResult
 from schemas.records import RecordKind
 
@@ -25,12 +27,12 @@ log = logging.getLogger("burnedge.jobs")
 TRACK = "track.json"
 
 
-def sessions(db: Database, config: Config, patient_id: str) -> list:
-    """The latest finished measurement of each of the patient's encounters, with its day since the injury counted
-    to when its pictures were taken (as the analysis counts its hours since injury)."""
+def sessions(db: Database, config: Config, patient_id: str, wound_id: str | None) -> list:
+    """The latest finished measurement of the wound in each of the patient's encounters, with its day since the
+    injury counted to when its pictures were taken (as the analysis counts its hours since injury)."""
     conn = db.connection()
     # A re-analysis of a visit replaces the earlier one.
-    latest = {job.encounter_id: job for job in jobs.measured(conn, patient_id)}
+    latest = {job.encounter_id: job for job in jobs.measured(conn, patient_id) if job.wound_id == wound_id}
     visits = []
     for encounter_id, job in latest.items():
         encounter = store.find_head(conn, RecordKind.encounter, encounter_id)
@@ -55,28 +57,50 @@ def sessions(db: Database, config: Config, patient_id: str) -> list:
     ]
 
 
-def update_track(db: Database, config: Config, patient_id: str) -> Path | None:
-    """Recompute the patient's track; None when the patient has no measured visit yet."""
-    visits = sessions(db, config, patient_id)
+def update_track(db: Database, config: Config, patient_id: str, wound_id: str | None) -> Path | None:
+    """Recompute the wound's track (the patient's own for analyses of no wound); None with no measured visit."""
+    visits = sessions(db, config, patient_id, wound_id)
     if not visits:
         return None
     from processing.longitudinal.track import run as track
 
-    out = folders.patient_dir(config, patient_id)
+    out = track_dir(config, patient_id, wound_id)
     path = track(config.tracking, visits, out)
-    log.info("healing track of patient %s: %d visits", patient_id, len(visits))
+    log.info("healing track of patient %s, wound %s: %d visits", patient_id, wound_id or "(none)", len(visits))
     return path
 
 
-def track_path(config: Config, patient_id: str) -> Path:
-    return folders.patient_dir(config, patient_id) / TRACK
+def track_dir(config: Config, patient_id: str, wound_id: str | None) -> Path:
+    base = folders.patient_dir(config, patient_id)
+    return base if wound_id is None else base / "wounds" / wound_id
 
 
-def read_track(config: Config, patient_id: str) -> TrackResult:
-    """The stored track as the API serves it: each visit's analysis as its API link, not the gateway's folder."""
-    path = track_path(config, patient_id)
-    if not path.exists():
-        raise NotFound(f"patient {patient_id} has no measured visit yet: the track starts with the first analysis")
+def track_path(conn: sqlite3.Connection, config: Config, patient_id: str, wound_id: str | None) -> Path | None:
+    """The wound's stored track.json; None when it has none yet. A wound the upgrade made has the patient's track
+    of before until its next analysis, when every visit in it is one of the wound's."""
+    path = track_dir(config, patient_id, wound_id) / TRACK
+    if path.exists():
+        return path
+    legacy = folders.patient_dir(config, patient_id) / TRACK
+    if wound_id is None or not legacy.exists():
+        return None
+    track = msgspec.json.decode(legacy.read_bytes(), type=TrackResult)
+    ours = {job.id for job in jobs.measured(conn, patient_id) if job.wound_id == wound_id}
+    visits = {job_of(s.analysis) for s in track.sessions}
+    return legacy if visits and visits <= ours else None
+
+
+def job_of(analysis_folder: str) -> str:
+    """work_dir/<job id>/analysis -> <job id>."""
+    return Path(analysis_folder).parent.name
+
+
+def read_track(conn: sqlite3.Connection, config: Config, patient_id: str, wound_id: str | None) -> TrackResult | None:
+    """The stored track as the API serves it (each visit's analysis as its API link, not the gateway's folder);
+    None when the wound has no measured visit yet."""
+    path = track_path(conn, config, patient_id, wound_id)
+    if path is None:
+        return None
     track = msgspec.json.decode(path.read_bytes(), type=TrackResult)
     linked = [msgspec.structs.replace(s, analysis=_link(s.analysis)) for s in track.sessions]
     return msgspec.structs.replace(track, sessions=linked)

@@ -30,10 +30,12 @@ def page_controllers() -> list:
     from gateway.pages.patients import PatientPages
     from gateway.pages.pictures import PicturePages
     from gateway.pages.transfers import TransferPages
+    from gateway.pages.wounds import WoundPages
 
     return [
         SignInController,
         PatientPages,
+        WoundPages,
         EncounterPages,
         BurnChartPages,
         PicturePages,

@@ -40,6 +40,8 @@ def _points(text: str, what: str) -> list[list[float]]:
 def analysis_request(data: dict[str, Any]) -> AnalysisRequest:
     """The AnalysisRequest the form describes; its own validation names what is wrong."""
     body: dict[str, Any] = {}
+    if wound := posted_text(data, "wound_id").strip():
+        body["wound_id"] = wound
     marker = posted_text(data, "marker_side_mm").strip()
     if marker:
         body["marker_side_mm"] = marker
@@ -77,6 +79,7 @@ class AnalysisPages(Controller):
         jobs = services.analyses.for_encounter(request.user, encounter_id)
         photos, videos = grouped(services.assets.for_encounter(request.user, encounter_id))
         usable = [a for a in photos if a.verdict and a.verdict.accepted]
+        wounds = services.wounds.of_patient(request.user, patient.meta.id)
         return page(
             request,
             "analyses.html",
@@ -87,6 +90,8 @@ class AnalysisPages(Controller):
             jobs=jobs,
             photos=usable,
             problem=problem,
+            wounds=wounds,
+            wound_labels={w.meta.id: w.value().label for w in wounds},
         )
 
     @post("/encounters/{encounter_id:str}/analyses", sync_to_thread=True, status_code=303)

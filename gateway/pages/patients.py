@@ -10,18 +10,19 @@ from litestar.params import QueryParameter
 from litestar.response import Redirect, Template
 
 from base.web.pages.forms import FormBody, form_fields
-from base.web.pages.rendering import clinic_clock, page, patient_name, svg
+from base.web.pages.rendering import clinic_clock, page, patient_name
 from base.web.paths import IdPath
 from base.web.site import AuthedRequest
 from gateway.dependencies import ServicesDep
-from gateway.pages.analyses import PAINTED_SURFACE
 from gateway.pages.common import parse_or_errors, posted_id, service_errors
-from processing.views.healing_plot_svg import healing_plots_svg
+from gateway.pages.healing_view import wound_section
 from schemas.accounts import Role
-from schemas.errors import InvalidInput, NotFound
+from schemas.burn_chart import LundBrowderRegion
+from schemas.errors import InvalidInput
 from schemas.ids import uuid7
 from schemas.patient import Encounter, Patient
 from schemas.records import Record, RecordKind
+from schemas.wound import WoundSide
 
 Search = Annotated[str, QueryParameter(max_length=200, description="Part of a name or an identifier")]
 PATIENT_SKIP = frozenset({"id"})
@@ -79,23 +80,20 @@ class PatientPages(Controller):
         patient = services.records.get(who, RecordKind.patient, patient_id)
         encounters = services.records.list_records(who, RecordKind.encounter, parent_id=patient_id, limit=None)
         encounters.sort(key=lambda r: r.data.get("time_of_arrival", ""), reverse=True)
-        try:
-            track = services.analyses.healing(who, patient_id)
-            plots = [(title, svg(markup)) for title, markup in healing_plots_svg(track)]
-        except NotFound:
-            track, plots = None, []
-        measured = [s for s in track.sessions if s.status == "ok" and s.analysis] if track else []
-        latest = measured[-1] if measured else None
+        wounds = services.wounds.of_patient(who, patient_id)
+        sections = [wound_section(s) for s in services.wounds.patient_healing(who, patient_id).wounds]
         return page(
             request,
             "patient.html",
             patient=patient,
             name=patient_name(patient.data),
             encounters=encounters,
-            track=track,
-            plots=plots,
-            latest=latest,
-            latest_surface=f"{latest.analysis}/artifacts/{PAINTED_SURFACE}" if latest else None,
+            wounds=wounds,
+            sections=sections,
+            regions=list(LundBrowderRegion),
+            sides=list(WoundSide),
+            record_id=uuid7(),
+            errors={"": problem} if (problem := request.query_params.get("wound_problem")) else {},
         )
 
     @get("/patients/{patient_id:str}/encounters/new", sync_to_thread=False)

@@ -5,7 +5,7 @@ client, so a large video resumes after the Wi-Fi drops)."""
 from __future__ import annotations
 
 from functools import partial
-from typing import Annotated
+from typing import Annotated, Any
 
 import anyio
 from litestar import Controller, get, post
@@ -25,7 +25,8 @@ from schemas.capture import Asset, AssetKind
 from schemas.errors import BurnedgeError, InvalidInput
 from schemas.ids import uuid7
 
-UploadForm = Annotated[dict[str, UploadFile | list[UploadFile] | str], Body(media_type=RequestEncodingType.MULTI_PART)]
+UploadForm = Annotated[dict[str, Any], Body(media_type=RequestEncodingType.MULTI_PART)]
+"""Files and the wound picked: Any, as msgspec cannot convert a union of UploadFile and str."""
 COPY_CHUNK = 1 << 20
 
 
@@ -53,6 +54,7 @@ class PicturePages(Controller):
             readiness, readiness_problem = services.assets.readiness(request.user, encounter_id), None
         except BurnedgeError as exc:
             readiness, readiness_problem = None, exc.detail
+        wounds = services.wounds.of_patient(request.user, patient.meta.id)
         stored = request.query_params.getall("stored", [])
         refused = request.query_params.getall("refused", [])
         return page(
@@ -67,6 +69,8 @@ class PicturePages(Controller):
             readiness_problem=readiness_problem,
             stored=stored,
             refused=refused,
+            wounds=wounds,
+            wound_labels={w.meta.id: w.value().label for w in wounds},
         )
 
     @post("/encounters/{encounter_id:str}/pictures", status_code=303)
@@ -82,6 +86,8 @@ class PicturePages(Controller):
             return Redirect(
                 path=f"/encounters/{encounter_id}/pictures", query_params={"refused": refused}, status_code=303
             )
+        wound = data.get("wound_id")
+        wound_id = wound if isinstance(wound, str) and wound else None
         stored, refused = [], []
         for upload in files:
             part = services.assets.store.part(f"form-{uuid7()}")
@@ -90,7 +96,7 @@ class PicturePages(Controller):
                     while chunk := await upload.read(COPY_CHUNK):
                         out.write(chunk)
                 name = check_filename(upload.filename)
-                store = partial(services.assets.store_upload, request.user, encounter_id, part, name)
+                store = partial(services.assets.store_upload, request.user, encounter_id, part, name, wound_id=wound_id)
                 asset = await anyio.to_thread.run_sync(store)
                 stored.append(asset.filename)
                 if asset.media_type.is_video:

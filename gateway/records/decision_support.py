@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import datetime as dt
 import sqlite3
-from pathlib import Path
 
 import msgspec
 
@@ -17,8 +16,9 @@ from base.accounts.permissions import Principal, require_decide, require_read, r
 from base.storage import records as store
 from gateway.jobs import timeline
 from gateway.records.computed import store_computed
+from gateway.storage import jobs
 from processing.clinical import decision_support as rules
-from processing.clinical.decision_inputs import DecisionInputs, Versioned
+from processing.clinical.decision_inputs import DecisionInputs, Versioned, WoundTrack
 from schemas.base import utcnow
 from schemas.clinical_results import InputRef
 from schemas.config import Config
@@ -44,18 +44,26 @@ def versioned(record: Record) -> Versioned:
     return Versioned(value, InputRef(kind=record.meta.kind.value, id=record.meta.id, version=record.meta.version))
 
 
-def _track(conn: sqlite3.Connection, config: Config, patient_id: str) -> tuple[TrackResult | None, list[InputRef]]:
-    path = timeline.track_path(config, patient_id)
-    if not path.exists():
-        return None, []
-    track = msgspec.json.decode(path.read_bytes(), type=TrackResult)
-    refs = []
-    for session in track.sessions:
-        job_id = Path(session.analysis).parent.name
-        head = store.find_head(conn, RecordKind.burn_analysis, job_id)
-        if head is not None:
-            refs.append(InputRef(kind=head.meta.kind.value, id=job_id, version=head.meta.version))
-    return track, refs
+def _tracks(conn: sqlite3.Connection, config: Config, patient_id: str) -> list[WoundTrack]:
+    """Each wound's stored track (and one for analyses of no wound), with the analyses it was made from."""
+    heads = store.list_heads(conn, RecordKind.wound, parent_id=patient_id, limit=None)
+    wounds: list[tuple[str | None, str]] = [(w.meta.id, w.value().label) for w in heads if not w.meta.deleted]
+    if any(job.wound_id is None for job in jobs.measured(conn, patient_id)):
+        wounds.append((None, "burn"))
+    out = []
+    for wound_id, label in wounds:
+        path = timeline.track_path(conn, config, patient_id, wound_id)
+        if path is None:
+            continue
+        track = msgspec.json.decode(path.read_bytes(), type=TrackResult)
+        refs = []
+        for session in track.sessions:
+            job_id = timeline.job_of(session.analysis)
+            head = store.find_head(conn, RecordKind.burn_analysis, job_id)
+            if head is not None:
+                refs.append(InputRef(kind=head.meta.kind.value, id=job_id, version=head.meta.version))
+        out.append(WoundTrack(label=label, track=track, refs=refs, wound_id=wound_id))
+    return out
 
 
 def gather(conn: sqlite3.Connection, config: Config, encounter_id: str, as_of: dt.datetime) -> DecisionInputs:
@@ -70,15 +78,13 @@ def gather(conn: sqlite3.Connection, config: Config, encounter_id: str, as_of: d
         for r in store.list_heads(conn, RecordKind.burn_analysis, parent_id=encounter_id, limit=None)
         if not r.meta.deleted
     ]
-    track, track_refs = _track(conn, config, patient.meta.id)
     return DecisionInputs(
         patient=versioned(patient),
         encounter=versioned(encounter),
         as_of=as_of,
         age_years=assessment.value.age_years if assessment else None,
         analyses=analyses,
-        track=track,
-        track_refs=track_refs,
+        tracks=_tracks(conn, config, patient.meta.id),
         **parts,
     )
 

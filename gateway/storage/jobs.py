@@ -17,7 +17,7 @@ from schemas.jobs import CaptureTime, JobInputs, JobState, StoredJob
 _COLUMNS = (
     "id, encounter_id, patient_id, input_digest, state, priority, stage, fraction, message, attempts, max_attempts,"
     " next_attempt_at, lease_owner, lease_expires_at, cancel_requested, error, pictures, result_status, created_at,"
-    " created_by, user_id, started_at, finished_at, cleaned_at, captured"
+    " created_by, user_id, started_at, finished_at, cleaned_at, captured, wound_id"
 )
 
 
@@ -49,6 +49,7 @@ def _job(row: sqlite3.Row) -> StoredJob:
         cleaned_at=row["cleaned_at"],
         # NULL for jobs queued before capture times were kept.
         captured=msgspec.json.decode(row["captured"], type=CaptureTime) if row["captured"] else None,
+        wound_id=row["wound_id"],
     )
 
 
@@ -168,8 +169,8 @@ def insert(conn: sqlite3.Connection, job: StoredJob, request: JobInputs) -> None
     """Store a new job (its columns not named here take the table's defaults)."""
     conn.execute(
         "INSERT INTO analysis_jobs (id, encounter_id, patient_id, input_digest, request, state, priority,"
-        " max_attempts, next_attempt_at, pictures, created_at, created_by, user_id, message, captured)"
-        " VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?,?)",
+        " max_attempts, next_attempt_at, pictures, created_at, created_by, user_id, message, captured, wound_id)"
+        " VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?)",
         (
             job.id,
             job.encounter_id,
@@ -186,6 +187,7 @@ def insert(conn: sqlite3.Connection, job: StoredJob, request: JobInputs) -> None
             job.user_id,
             job.message,
             msgspec.json.encode(job.captured).decode() if job.captured is not None else None,
+            job.wound_id,
         ),
     )
 

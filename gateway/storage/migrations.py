@@ -215,3 +215,17 @@ def m009_capture_time_and_attempts(db: Database) -> None:
             PRIMARY KEY (job_id, seq)
         )"""
     )
+
+
+@migrations()
+def m010_wounds(db: Database) -> None:
+    """Pictures and analyses belong to a wound. Each patient with analyses gets one wound holding all of them and
+    their encounters' pictures (a versioned record written by the gateway, with its audit entry); nothing else
+    changes, and a clinician then splits or corrects it."""
+    db.execute("ALTER TABLE assets ADD COLUMN wound_id TEXT")
+    db.execute("ALTER TABLE analysis_jobs ADD COLUMN wound_id TEXT")
+    db.execute("CREATE INDEX assets_wound ON assets (wound_id)")
+    db.execute("CREATE INDEX analysis_jobs_wound ON analysis_jobs (wound_id, created_at)")
+    from gateway.storage.wound_upgrade import give_each_patient_a_wound
+
+    give_each_patient_a_wound(db.conn)

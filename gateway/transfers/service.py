@@ -2,13 +2,17 @@
 
 from __future__ import annotations
 
+import msgspec
+
 from base.accounts.permissions import Principal, require_read
 from base.storage import records as store
 from gateway.documents.reports import ReportService
 from gateway.storage.database import Database
+from gateway.wounds.healing import patient_healing
 from schemas.accounts import Role
 from schemas.config import Config
 from schemas.errors import Forbidden
+from schemas.patient import Encounter
 from schemas.records import Record, RecordKind
 from schemas.transfer import OutboxEntry, SyncStatus
 from sync.bundle import PartData
@@ -21,6 +25,7 @@ SENDERS = frozenset({Role.clinician})
 class TransferService:
     def __init__(self, db: Database, config: Config, reports: ReportService):
         self.db = db
+        self.config = config
         self.sync = SyncService(db, config)
         self.reports = reports
 
@@ -28,11 +33,16 @@ class TransferService:
         if who.role not in SENDERS:
             raise Forbidden("only a clinician may send a case to the burn center")
         require_read(who, RecordKind.encounter)
-        store.get_head(self.db.connection(), RecordKind.encounter, encounter_id)  # NotFound before anything about keys
+        conn = self.db.connection()
+        encounter = store.get_head(conn, RecordKind.encounter, encounter_id)  # NotFound before anything about keys
         self.sync.keys()  # a clinic not linked to a center says so before a report is made
-        # The consultant reads the same report the clinic prints.
+        # The consultant reads the same report the clinic prints, and the same healing per wound.
         report = self.reports.make(who, encounter_id)
-        return self.sync.queue(encounter_id, who.username, (PartData("report.pdf", report.pdf),))
+        patient_id = msgspec.convert(encounter.data, Encounter).patient_id
+        wounds = store.list_heads(conn, RecordKind.wound, parent_id=patient_id, limit=None)
+        healing = patient_healing(self.db, self.config, patient_id, wounds)
+        extra = (PartData("report.pdf", report.pdf), PartData("healing.json", msgspec.json.encode(healing)))
+        return self.sync.queue(encounter_id, who.username, extra)
 
     def transfers(self, who: Principal, encounter_id: str) -> list[OutboxEntry]:
         require_read(who, RecordKind.encounter)

@@ -13,6 +13,7 @@ from gateway.records.controller import REPLAYED, UPDATE, WITHDRAW, IfMatch, Reas
 from gateway.records.http import outcome_response, parse_version, record_response
 from schemas.records import Record, RecordHistory, RecordKind
 from schemas.wound import Wound
+from schemas.wound_healing import PatientHealing, WoundHealing
 
 
 class PatientWoundsController(Controller):
@@ -39,6 +40,20 @@ class PatientWoundsController(Controller):
         include_deleted: FromQuery[bool] = False,
     ) -> list[Record]:
         return services.wounds.of_patient(request.user, patient_id, include_deleted=include_deleted)
+
+
+class PatientHealingController(Controller):
+    path = "/api/v1/patients/{patient_id:str}/healing"
+    tags = ["wounds"]
+
+    @get(
+        "/",
+        sync_to_thread=True,
+        summary="Healing over time, one section per wound: its visits aligned, area change, rate, share of the body",
+        responses=problems(*ONE),
+    )
+    def read(self, patient_id: IdPath, request: AuthedRequest, services: ServicesDep) -> PatientHealing:
+        return services.wounds.patient_healing(request.user, patient_id)
 
 
 class WoundController(Controller):
@@ -78,6 +93,15 @@ class WoundController(Controller):
     ) -> Response[Record]:
         version = parse_version(if_match, action="withdrawing a wound")
         return outcome_response(services.wounds.withdraw(request.user, wound_id, version, reason))
+
+    @get(
+        "/{wound_id:str}/healing",
+        sync_to_thread=True,
+        summary="The wound's healing track (its own analyses only) and its measured share of the body",
+        responses=problems(*ONE),
+    )
+    def healing(self, wound_id: IdPath, request: AuthedRequest, services: ServicesDep) -> WoundHealing:
+        return services.wounds.healing(request.user, wound_id)
 
     @get("/{wound_id:str}/history", sync_to_thread=False, summary="Every version of a wound", responses=problems(*ONE))
     def history(self, wound_id: IdPath, request: AuthedRequest, services: ServicesDep) -> RecordHistory:

@@ -51,6 +51,8 @@ def injury_from_encounters(conn: sqlite3.Connection, patient_id: str) -> dt.date
 
 
 def _check_regions(wound: Wound) -> None:
+    if not wound.regions:
+        raise bad_field("$.regions", "say which Lund-Browder regions the wound covers: at least one")
     seen = set()
     for i, region in enumerate(wound.regions):
         if region in seen:

@@ -34,6 +34,17 @@ class Versioned(Generic[T]):
 
 
 @dataclass(frozen=True)
+class WoundTrack:
+    """One wound's healing track and the analyses it was made from."""
+
+    label: str
+    """The wound's short name ("left forearm"); the recommendations name it when the patient has several."""
+    track: TrackResult
+    refs: list[InputRef] = field(default_factory=list)
+    wound_id: str | None = None
+
+
+@dataclass(frozen=True)
 class DecisionInputs:
     patient: Versioned[Patient]
     encounter: Versioned[Encounter]
@@ -49,16 +60,14 @@ class DecisionInputs:
     resuscitation: Versioned[Resuscitation] | None = None
     assessment: Versioned[Assessment] | None = None
     analyses: list[Versioned[BurnAnalysis]] = field(default_factory=list)
-    track: TrackResult | None = None
-    """The patient's healing track over every measured visit, when there is one."""
-    track_refs: list[InputRef] = field(default_factory=list)
-    """The analyses the track was made from."""
+    tracks: list[WoundTrack] = field(default_factory=list)
+    """Each wound's healing track, for the wounds with a measured visit (never one track over several wounds)."""
 
     def refs(self) -> list[InputRef]:
         parts = [self.patient, self.encounter, self.intake, self.primary, self.secondary, self.mechanism]
         parts += [self.chart, self.resuscitation, self.assessment, *self.analyses]
         seen = {(p.ref.kind, p.ref.id): p.ref for p in parts if p is not None}
-        for ref in self.track_refs:
+        for ref in (r for t in self.tracks for r in t.refs):
             seen.setdefault((ref.kind, ref.id), ref)
         return list(seen.values())
 

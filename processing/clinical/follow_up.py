@@ -88,31 +88,32 @@ def timing(inputs: DecisionInputs) -> tuple[list[Recommendation], list[str]]:
 
 
 def healing_prompts(inputs: DecisionInputs) -> list[Recommendation]:
-    """One recommendation per published rule the healing track triggers (a prompt to review, not a verdict)."""
-    track = inputs.track
-    if track is None:
-        return []
-    refs = inputs.track_refs
+    """One recommendation per published rule a wound's healing track triggers (a prompt to review, not a verdict).
+    With several wounds, each is named and keyed by its own id."""
     out = []
-    for flag in track.stall_flags:
-        if not (flag.evaluable and flag.triggered):
-            continue
-        deitch = flag.citation.startswith("Deitch")
-        name = "kantor" if not deitch else "deitch_projected" if flag.rule.startswith("projected") else "deitch"
-        used = [
-            InputUsed(
-                name="measured visit", value=f"{ref.kind} {ref.id}", kind=ref.kind, id=ref.id, version=ref.version
+    several = len(inputs.tracks) > 1
+    for wound in inputs.tracks:
+        for flag in wound.track.stall_flags:
+            if not (flag.evaluable and flag.triggered):
+                continue
+            deitch = flag.citation.startswith("Deitch")
+            name = "kantor" if not deitch else "deitch_projected" if flag.rule.startswith("projected") else "deitch"
+            used = [
+                InputUsed(
+                    name="measured visit", value=f"{ref.kind} {ref.id}", kind=ref.kind, id=ref.id, version=ref.version
+                )
+                for ref in wound.refs
+            ]
+            of = f" of the {wound.label}" if several else ""
+            key = f"follow_up.healing.{name}" + (f".{wound.wound_id}" if several and wound.wound_id else "")
+            out.append(
+                Recommendation(
+                    key=key,
+                    category=RecommendationCategory.follow_up,
+                    text=f"Review the healing plan{of}: {flag.rule} ({flag.detail}).",
+                    details=[f"Source: {flag.citation}"],
+                    inputs=used,
+                    source=DEITCH if deitch else KANTOR_MARGOLIS,
+                )
             )
-            for ref in refs
-        ]
-        out.append(
-            Recommendation(
-                key=f"follow_up.healing.{name}",
-                category=RecommendationCategory.follow_up,
-                text=f"Review the healing plan: {flag.rule} ({flag.detail}).",
-                details=[f"Source: {flag.citation}"],
-                inputs=used,
-                source=DEITCH if deitch else KANTOR_MARGOLIS,
-            )
-        )
     return out

@@ -13,6 +13,7 @@ from processing.fhir import codes, history, record, wound
 from processing.fhir.codes import concept
 from processing.fhir.record import iso, ref, resource_id
 from processing.fhir.wound import Attached
+from processing.fhir.wound_condition import wound_conditions
 from processing.snapshot import EncounterSnapshot
 from schemas.analysis import ModelSummary
 from schemas.errors import BurnedgeError
@@ -43,7 +44,9 @@ class BundleFiles:
     """The clinical report (PDF) made from the same record versions."""
 
 
-def _analysis_resources(inputs: EncounterSnapshot, files: BundleFiles, subject: dict, enc: dict) -> list[dict]:
+def _analysis_resources(
+    inputs: EncounterSnapshot, files: BundleFiles, subject: dict, enc: dict, wounds: dict[str, dict]
+) -> list[dict]:
     out = []
     for page in inputs.analyses:
         job_id = page.analysis.value.job_id
@@ -53,10 +56,15 @@ def _analysis_resources(inputs: EncounterSnapshot, files: BundleFiles, subject: 
         if visit_id != inputs.encounter.value.id:  # another visit's encounter: named, not in this Bundle
             visit = {"identifier": record.record_identifier("encounter", visit_id), "display": page.visit}
         photos = [wound.media(p, subject, visit, job_id) for p in found.photos]
-        out += photos + [wound.wound_size(page, subject, visit, photos, found.model)]
+        size = wound.wound_size(page, subject, visit, photos, found.model)
+        condition = wounds.get(page.wound_id or "")
+        if condition is not None:  # the wound this panel measures
+            size["focus"] = [ref(condition)]
+            size["bodySite"] = condition["bodySite"][0] if condition["bodySite"] else {"text": page.wound}
+        out += photos + [size]
         if found.surface:
             text = f"Painted 3D burn surface of the analysis of {page.visit} (glTF binary)"
-            out.append(wound.document(found.surface, "3D burn surface", subject, visit, text))
+            out.append(wound.document(found.surface, "3D burn surface", subject, visit, text, of=job_id))
     return out
 
 
@@ -102,11 +110,12 @@ def build(inputs: EncounterSnapshot, files: BundleFiles) -> dict:
     subject = ref(patient)
     enc = {"reference": f"urn:uuid:{resource_id('encounter', inputs.encounter.value.id)}"}
     conditions = record.conditions(inputs.chart, inputs.encounter, subject)
-    resources = [patient, record.encounter(inputs.encounter, subject, conditions), *conditions]
+    wounds = wound_conditions(inputs.wounds, subject)
+    resources = [patient, record.encounter(inputs.encounter, subject, conditions), *conditions, *wounds.values()]
     resources += history.allergies(inputs.intake, subject, enc) + history.medications(inputs.intake, subject, enc)
     resources += history.tetanus(inputs.intake, inputs.encounter, subject, enc)
     resources += record.assessment_observations(inputs.assessment, inputs.chart, inputs.encounter, subject, enc)
-    resources += _analysis_resources(inputs, files, subject, enc)
+    resources += _analysis_resources(inputs, files, subject, enc, wounds)
     resources += record.communications(inputs.consultations, subject, enc)
     if files.report:
         text = f"Clinical report {inputs.report_id}, made {iso(inputs.made_at)} by {inputs.made_by}"

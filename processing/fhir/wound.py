@@ -75,10 +75,12 @@ def media(file: Attached, subject: dict, enc: dict, job_id: str) -> dict:
     return out
 
 
-def document(file: Attached, kind: str, subject: dict, enc: dict, description: str) -> dict:
+def document(file: Attached, kind: str, subject: dict, enc: dict, description: str, of: str = "") -> dict:
+    """`of` names what the document belongs to (an analysis's job id): two analyses of the same photos paint the
+    same surface, and each needs its own resource."""
     return {
         "resourceType": "DocumentReference",
-        "id": resource_id("document", kind, file.sha256),
+        "id": resource_id("document", kind, file.sha256, *([of] if of else [])),
         "identifier": [_sha256_identifier(file)],
         "status": "current",
         "type": {"text": kind},

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from processing.report import sections_advice, sections_analysis, sections_header, sections_record
+from processing.report import sections_advice, sections_analysis, sections_header, sections_healing, sections_record
 from processing.report.inputs import versions_digest
 from processing.report.layout import ReportPDF
 from processing.snapshot import EncounterSnapshot
@@ -44,7 +44,7 @@ def render(r: EncounterSnapshot) -> bytes:
     sections_record.referral(pdf, r)
     with sections_analysis.scratch_dir() as scratch:
         sections_analysis.analyses(pdf, r, Path(scratch))
-        sections_analysis.healing(pdf, r)
+        sections_healing.healing(pdf, r)
         sections_advice.decision_support(pdf, r)
         sections_advice.consultations(pdf, r)
         return bytes(pdf.output())

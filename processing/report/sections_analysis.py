@@ -9,9 +9,7 @@ from pathlib import Path
 import cv2
 
 from processing.report.figures import DIGITS, figure, hours
-from processing.report.healing_series import healing_series
 from processing.report.layout import GREY, URGENT, ReportPDF
-from processing.report.plots import line_plot
 from processing.report.surface_render import render_surface
 from processing.snapshot import AnalysisVisit, EncounterSnapshot
 from schemas.analysis import DISCLAIMER, AnalysisStatus, ConfidenceRecord
@@ -162,69 +160,6 @@ def _two_views(overlays: list[Path]) -> list[Path]:
     if len(overlays) <= 2:
         return overlays
     return [overlays[0], overlays[len(overlays) // 2]]
-
-
-def healing(pdf: ReportPDF, r: EncounterSnapshot) -> None:
-    track = r.track
-    if track is None or not track.sessions:
-        pdf.heading("Healing over time")
-        pdf.para("No measured visit yet: the healing track starts with the first analysis.", colour=GREY)
-        return
-    pdf.add_page()
-    pdf.heading("Healing over time", new_page_if_below=0)
-    area, relief, volume = healing_series(track)
-    width, height = pdf.epw, 52
-    y = pdf.get_y()
-    plot = {"points": area.points, "title": area.title, "y_label": area.unit}
-    line_plot(pdf, pdf.l_margin, y, width, height, **plot, fit=area.fit, marks=area.all_marks())
-    half = (width - 6) / 2
-    for i, series in enumerate((relief, volume)):
-        x = pdf.l_margin + i * (half + 6)
-        line_plot(pdf, x, y + height + 6, half, 46, points=series.points, title=series.title, y_label=series.unit)
-    pdf.set_y(y + height + 56)
-    rows = [
-        [
-            f"{s.day:g}",
-            s.status,
-            figure(s.area_cm2, "area_cm2"),
-            figure(s.relief_max_mm, "relief_max_mm"),
-            figure(s.volume_cm3, "volume_cm3"),
-            f"{s.percent_area_reduction:.1f} %" if s.percent_area_reduction is not None else "—",
-            s.confidence_level or "—",
-        ]
-        for s in track.sessions
-    ]
-    pdf.table(
-        ["Day", "Status", "Area", "Relief", "Volume", "Area reduction", "Confidence"],
-        rows,
-        [16, 22, 30, 28, 30, 32, 24],
-    )
-    rate = track.healing_rate_cm2_per_day
-    closure = track.projected_closure_day
-    span = track.projected_closure_range_days
-    facts = [("Healing rate", figure(rate, "healing_rate_cm2_per_day", "cm²/day") + " (least-squares slope)")]
-    if closure is not None:
-        low = "?" if not span or span[0] is None else f"{span[0]:.0f}"
-        high = "open" if not span or span[1] is None else f"{span[1]:.0f}"
-        facts.append(
-            (
-                "Projected closure",
-                f"day {figure(closure, 'closure_day', '')} (95 % range {low} to {high}); "
-                "an extrapolation of the line, not a prediction of healing",
-            )
-        )
-    elif track.projection_note:
-        facts.append(("Projected closure", track.projection_note))
-    pdf.facts(facts)
-    pdf.subheading("Review prompts")
-    for flag in track.stall_flags:
-        state = "MET — review" if flag.triggered else "not met" if flag.evaluable else "not yet evaluable"
-        pdf.para(
-            f"{flag.rule}: {state}. {flag.detail}", bold=flag.triggered, colour=URGENT if flag.triggered else (0, 0, 0)
-        )
-        pdf.para(flag.citation, size=7, colour=GREY, indent=3)
-    pdf.bullets(track.notes, colour=GREY)
-    pdf.para(track.disclaimer, size=7.5, colour=GREY)
 
 
 def scratch_dir() -> tempfile.TemporaryDirectory:

@@ -75,14 +75,20 @@ def at_a_glance(pdf: ReportPDF, r: EncounterSnapshot) -> None:
         )
     elif plan is not None:
         rows.append(("Fluids", "formal resuscitation not indicated or its 24 hours are over (see Fluids)"))
-    measured = [s for s in (r.track.sessions if r.track else []) if s.area_cm2 is not None]
-    if measured:
+    for wound in r.healing:
+        measured = [s for s in (wound.track.sessions if wound.track else []) if s.area_cm2 is not None]
+        if not measured:
+            continue
         last = measured[-1]
+        name = f"Latest area, {wound.label}" if len(r.healing) > 1 else "Latest burn area"
+        share = wound.share
+        percent = f", {share.measured_percent:.3f} %TBSA" if share and share.measured_percent is not None else ""
+        flagged = "; CHECK the chart against it (see Healing over time)" if share and share.flag else ""
         rows.append(
             (
-                "Latest burn area",
-                f"{figure(last.area_cm2, 'area_cm2')} on day {last.day:g} "
-                f"({len(measured)} measured visits; see Healing over time)",
+                name,
+                f"{figure(last.area_cm2, 'area_cm2')}{percent} on day {last.day:g} "
+                f"({len(measured)} measured visits; see Healing over time){flagged}",
             )
         )
     support = r.decision_support.value if r.decision_support else None

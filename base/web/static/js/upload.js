@@ -9,6 +9,9 @@ document.addEventListener("DOMContentLoaded", () => {
   const input = form.querySelector("input[type=file]");
   const progress = form.querySelector("[data-upload-progress]");
   const token = document.body.dataset.csrfToken;
+  const wound = form.querySelector("select[name=wound_id]");
+  // The wound picked on the form travels in the upload's metadata; none picked says nothing.
+  const wounded = (metadata) => (wound && wound.value ? { ...metadata, wound_id: wound.value } : metadata);
 
   const line = (file) => {
     const row = document.createElement("p");
@@ -36,7 +39,7 @@ document.addEventListener("DOMContentLoaded", () => {
         retryDelays: [0, 1000, 3000, 5000, 10000, 20000, 30000, 60000],
         removeFingerprintOnSuccess: true,
         headers: { "X-CSRF-Token": token },
-        metadata: { encounter_id: form.dataset.encounterId, filename: file.name, filetype: file.type },
+        metadata: wounded({ encounter_id: form.dataset.encounterId, filename: file.name, filetype: file.type }),
         onProgress: (sent, total) => {
           bar.value = total ? Math.floor((100 * sent) / total) : 0;
         },
