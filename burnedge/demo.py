@@ -50,8 +50,8 @@ SERIES_DAYS = (0, 7, 14, 21)
 BURN_REGION_FRACTION = 0.065
 """The charted share of the right forearm's back (Lund-Browder: 1.5 % of an adult's body surface): about 18 cm2 on
 this patient (1.85 m2), the size of the rendered burn."""
-SHIN_REGION_FRACTION = 0.02
-"""The charted share of the front of the left lower leg (Lund-Browder: 1.75 % of an adult's body surface): about
+SHIN_REGION_FRACTION = 0.01
+"""The charted share of the front of the left lower leg (Lund-Browder: 3.5 % of an adult's body surface): about
 6 cm2, the size of the second rendered burn."""
 SHIN_AREA_CM2 = 6.0
 DEMO_USERS = {"admin": Role.admin, "clinician": Role.clinician, "nurse": Role.nurse, "consultant": Role.consultant}
