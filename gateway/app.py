@@ -26,13 +26,14 @@ from gateway.dependencies import Services, provide_services
 from gateway.documents.fhir_controller import FhirController
 from gateway.documents.report_controller import ReportController
 from gateway.jobs.supervisor import Workers
-from gateway.pages import NAV, SITE_NAME, TEMPLATES, page_controllers
+from gateway.pages import NAV, SITE_NAME
 from gateway.phones.controller import SyncController
 from gateway.reactions import ANALYSIS_STORED
 from gateway.records.controller import EncounterController, PatientController
 from gateway.records.decision_support_controller import DecisionSupportController
 from gateway.records.parts_controller import PART_CONTROLLERS
 from gateway.scheduler import start_scheduler
+from gateway.site import TEMPLATE_DIRS, page_controllers
 from gateway.storage.database import Database
 from gateway.transfers.controller import TransferController
 from gateway.wounds.controller import PatientHealingController, PatientWoundsController, WoundController
@@ -73,7 +74,7 @@ def create_app(config: Config, *, start_workers: bool = False) -> Litestar:
             "services": Provide(provide_services, sync_to_thread=False, use_cache=True),
         },
         middleware=[security_headers, csrf_protection, session_auth],
-        template_config=template_config([TEMPLATES], clock),
+        template_config=template_config(TEMPLATE_DIRS, clock),
         exception_handlers=EXCEPTION_HANDLERS,
         openapi_config=OpenAPIConfig(
             title="burnedge gateway",

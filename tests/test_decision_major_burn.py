@@ -8,7 +8,7 @@ import msgspec
 import pytest
 
 from base.web.pages.rendering import environment
-from gateway.pages import TEMPLATES
+from gateway.site import TEMPLATE_DIRS
 from processing.clinical import (
     airway,
     circulation,
@@ -247,7 +247,7 @@ def test_the_encounter_page_lists_urgent_recommendations_first_even_from_an_olde
     support = decision_support.recommend(case.inputs(), computed_at=case.INJURY)
     older = sorted(support.recommendations, key=lambda r: r.urgent)  # as a record stored before the ordering
     view = SimpleNamespace(decision_support=msgspec.structs.replace(support, recommendations=older))
-    template = environment([TEMPLATES]).get_template("recommendations.html")
+    template = environment(TEMPLATE_DIRS).get_template("recommendations.html")
     nurse = SimpleNamespace(role=SimpleNamespace(value="nurse"))
     html = template.render(view=view, principal=nurse, csrf_token="x", act_problem=None, act_reason="")
     shown = [line.split('data-key="')[1].split('"')[0] for line in html.splitlines() if 'data-key="' in line]

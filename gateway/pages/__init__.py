@@ -1,7 +1,10 @@
-"""The clinic's browser face, served by the gateway itself: thin page controllers over the same services as the API.
+"""What the gateway's pages share: the site's name and menu, the helpers every page controller uses (`common`), the
+encounter's header and overview (`encounter_view`), a wound's healing section (`healing_view`) and the shared
+templates (macros, the healing track).
 
-Pages read and write through the domains' services with the signed-in principal, so one permission rule applies to
-both; the templates are in gateway/pages/templates beside the shared layout (base/web/templates)."""
+Each domain keeps its own page controllers and templates (gateway/records/patient_pages.py and
+gateway/records/templates/, gateway/capture/picture_pages.py...); gateway/site.py lists them. This package imports
+no domain: the domains import it."""
 
 from __future__ import annotations
 
@@ -18,28 +21,3 @@ NAV = [
     NavItem("Burn center", "/transfers", _CARE | {Role.admin.value}),
     NavItem("Admin", "/admin", frozenset({Role.admin.value})),
 ]
-
-
-def page_controllers() -> list:
-    """Every page controller of the gateway (imported here so the app factory names one thing)."""
-    from base.web.pages.admin import AdminPages
-    from base.web.pages.sign_in import SignInController
-    from gateway.pages.analyses import AnalysisPages
-    from gateway.pages.burn_chart import BurnChartPages
-    from gateway.pages.encounters import EncounterPages
-    from gateway.pages.patients import PatientPages
-    from gateway.pages.pictures import PicturePages
-    from gateway.pages.transfers import TransferPages
-    from gateway.pages.wounds import WoundPages
-
-    return [
-        SignInController,
-        PatientPages,
-        WoundPages,
-        EncounterPages,
-        BurnChartPages,
-        PicturePages,
-        AnalysisPages,
-        TransferPages,
-        AdminPages,
-    ]

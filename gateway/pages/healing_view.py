@@ -6,10 +6,12 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from base.web.pages.rendering import svg
-from gateway.pages.analyses import PAINTED_SURFACE
 from processing.views.healing_plot_svg import healing_plots_svg
 from schemas.longitudinal import TrackSession
 from schemas.wound_healing import SHARE_SOURCES, WoundHealing
+
+PAINTED_SURFACE = "surface/burn_surface.glb"
+"""The analysis file that holds the burn painted on the 3D surface (glTF binary), shown in the viewer."""
 
 
 @dataclass(frozen=True)

@@ -199,14 +199,3 @@ class EncounterPages(Controller):
                 problem = exc.detail
         key, reason = posted_text(data, "key"), posted_text(data, "reason")
         return self._overview(request, services, encounter_id, status, act_problem=(key, problem), act_reason=reason)
-
-    @post("/send", sync_to_thread=True, status_code=303)
-    def send(self, encounter_id: IdPath, request: AuthedRequest, services: ServicesDep) -> Redirect:
-        services.transfers.send(request.user, encounter_id)
-        services.run_sync_now()
-        return Redirect(path=f"/encounters/{encounter_id}#burn-center", status_code=303)
-
-    @get("/report", sync_to_thread=False)
-    def report(self, encounter_id: IdPath, request: AuthedRequest, services: ServicesDep) -> Template:
-        encounter, patient = encounter_header(services, request.user, encounter_id)
-        return page(request, "report.html", encounter=encounter, patient=patient, tab="report")

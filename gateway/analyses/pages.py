@@ -15,14 +15,14 @@ from base.web.pages.forms import FormBody
 from base.web.pages.rendering import page
 from base.web.paths import IdPath
 from base.web.site import AuthedRequest
+from gateway.capture.picture_pages import grouped
 from gateway.dependencies import ServicesDep
 from gateway.pages.common import posted_text
 from gateway.pages.encounter_view import encounter_header
-from gateway.pages.pictures import grouped
+from gateway.pages.healing_view import PAINTED_SURFACE
 from schemas.errors import BurnedgeError, InvalidInput
 from schemas.jobs import FINISHED, AnalysisRequest
 
-PAINTED_SURFACE = "surface/burn_surface.glb"
 _POINT = re.compile(r"\s*(-?\d+(?:\.\d+)?)\s*,\s*(-?\d+(?:\.\d+)?)\s*")
 
 

@@ -6,8 +6,22 @@ from litestar import Controller, get, post
 from litestar.response import Redirect, Template
 
 from base.web.pages.rendering import page
+from base.web.paths import IdPath
 from base.web.site import AuthedRequest
 from gateway.dependencies import ServicesDep
+
+
+class EncounterSendPages(Controller):
+    """The encounter page's "send to the burn center" button."""
+
+    path = "/encounters/{encounter_id:str}"
+    include_in_schema = False
+
+    @post("/send", sync_to_thread=True, status_code=303)
+    def send(self, encounter_id: IdPath, request: AuthedRequest, services: ServicesDep) -> Redirect:
+        services.transfers.send(request.user, encounter_id)
+        services.run_sync_now()
+        return Redirect(path=f"/encounters/{encounter_id}#burn-center", status_code=303)
 
 
 class TransferPages(Controller):
