@@ -123,7 +123,18 @@ class AnalysisService:
             videos = [a.filename for a in chosen if a.kind is AssetKind.video]
             if videos:
                 raise InvalidInput(f"{', '.join(videos)}: give the frames taken from a video, not the video")
+            elsewhere = [a.filename for a in chosen if wound_id is not None and a.wound_id not in (None, wound_id)]
+            if elsewhere:
+                raise InvalidInput(
+                    f"{', '.join(elsewhere)} show another wound: leave them out, or move them to this wound first"
+                    " (PUT /api/v1/assets/{id}/wound)"
+                )
         minimum = self.config.reconstruction.min_views
+        if not chosen and wound_id is not None:
+            raise InvalidInput(
+                "no picture of this wound in the encounter: upload its pictures with the wound named"
+                " (Upload-Metadata wound_id) or set the wound of pictures already sent"
+            )
         if len(chosen) < minimum:
             raise InvalidInput(
                 f"{len(chosen)} pictures: a 3D analysis needs at least {minimum} (the capture "

@@ -79,7 +79,7 @@ class PatientPages(Controller):
         who = request.user
         patient = services.records.get(who, RecordKind.patient, patient_id)
         encounters = services.records.list_records(who, RecordKind.encounter, parent_id=patient_id, limit=None)
-        encounters.sort(key=lambda r: r.data.get("time_of_arrival", ""), reverse=True)
+        encounters.sort(key=lambda r: r.value().time_of_arrival, reverse=True)
         wounds = services.wounds.of_patient(who, patient_id)
         sections = [wound_section(s) for s in services.wounds.patient_healing(who, patient_id).wounds]
         return page(

@@ -286,7 +286,7 @@ def _same_content(current: Record, data_json: bytes) -> bool:
 
 def _parent_of(record: Record) -> str | None:
     if record.meta.kind in PATIENT_RECORDS:
-        return record.data.get("patient_id")
+        return record.value().patient_id
     if record.meta.kind is RecordKind.patient:
         return None
     return record.meta.id

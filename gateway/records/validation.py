@@ -148,7 +148,7 @@ def require_live_encounter(conn: sqlite3.Connection, encounter_id: str) -> Recor
 
 def check_unchanged_links(kind: RecordKind, struct, current: Record) -> None:
     """An update may not move a record to another patient or encounter."""
-    if kind in PATIENT_RECORDS and struct.patient_id != current.data["patient_id"]:
+    if kind in PATIENT_RECORDS and struct.patient_id != current.value().patient_id:
         again = "open a new one" if kind is RecordKind.encounter else "record a new one"
         raise bad_field("$.patient_id", f"{_article(kind)} cannot move to another patient: withdraw it and {again}")
 

@@ -40,13 +40,12 @@ def injury_from_encounters(conn: sqlite3.Connection, patient_id: str) -> dt.date
     """The time of injury of the patient's most recent encounter (latest time of arrival, withdrawn ones left out)
     that records one; None when none does."""
     latest: tuple[dt.datetime, dt.datetime] | None = None
-    for encounter in store.list_heads(conn, RecordKind.encounter, parent_id=patient_id, limit=None):
-        injury = encounter.data.get("time_of_injury")
-        if injury is None:
+    for record in store.list_heads(conn, RecordKind.encounter, parent_id=patient_id, limit=None):
+        encounter = record.value()
+        if encounter.time_of_injury is None:
             continue
-        arrival = dt.datetime.fromisoformat(encounter.data["time_of_arrival"])
-        if latest is None or arrival > latest[0]:
-            latest = (arrival, dt.datetime.fromisoformat(injury))
+        if latest is None or encounter.time_of_arrival > latest[0]:
+            latest = (encounter.time_of_arrival, encounter.time_of_injury)
     return latest[1] if latest else None
 
 
