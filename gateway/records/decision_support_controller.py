@@ -8,8 +8,8 @@ from base.web.paths import IdPath
 from base.web.problems import BODY, ONE, problems
 from base.web.site import AuthedRequest
 from gateway.dependencies import ServicesDep
-from gateway.records.controller import IfMatch
 from gateway.records.http import parse_version, record_response
+from gateway.records.record_routes import IfMatch
 from schemas.decision_support import RecommendationAct
 from schemas.records import Record, RecordHistory, RecordKind
 

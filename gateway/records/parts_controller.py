@@ -15,8 +15,8 @@ from base.web.paths import IdPath
 from base.web.problems import ONE, problems
 from base.web.site import AuthedRequest
 from gateway.dependencies import ServicesDep
-from gateway.records.controller import UPDATE, WITHDRAW, IfMatch, Reason
 from gateway.records.http import outcome_response, parse_version, record_response
+from gateway.records.record_routes import UPDATE, WITHDRAW, IfMatch, Reason
 from schemas.burn_chart import BurnChart
 from schemas.errors import Conflict, InvalidInput, VersionMismatch
 from schemas.record_parts import Intake, Mechanism, PrimarySurvey, Resuscitation, SecondarySurvey

@@ -1,8 +1,9 @@
-"""A patient's wounds: create, list, read, update with If-Match, withdraw, history.
+"""A patient's wounds: created and listed under the patient, and their healing.
 
 Wounds are versioned records of their own kind (`wound`, parent the patient), so the record service stores them:
-every write is one transaction with its audit entry, checked by gateway/wounds/rules.py. This service adds what a
-wound's addresses need: a wound is created and listed under its patient.
+every write is one transaction with its audit entry, checked by gateway/wounds/rules.py; read, update, withdraw and
+history go straight to it (gateway/records/record_routes.py). This service adds what a wound's addresses need: a
+wound is created and listed under its patient, and its healing is read from its own analyses.
 """
 
 from __future__ import annotations
@@ -37,20 +38,6 @@ class WoundService:
         return self.records.list_records(
             principal, KIND, parent_id=patient_id, include_deleted=include_deleted, limit=None
         )
-
-    def get(self, principal: Principal, wound_id: str) -> Record:
-        return self.records.get(principal, KIND, wound_id)
-
-    def history(self, principal: Principal, wound_id: str) -> list[Record]:
-        return self.records.history(principal, KIND, wound_id)
-
-    def update(self, principal: Principal, wound_id: str, wound: Wound, if_match: int) -> WriteOutcome:
-        """The next version; If-Match of a withdrawn version restores the wound."""
-        return self.records.update(principal, KIND, wound_id, wound, if_match)
-
-    def withdraw(self, principal: Principal, wound_id: str, if_match: int, reason: str) -> WriteOutcome:
-        """A withdrawn version with its reason; history keeps every version."""
-        return self.records.delete(principal, KIND, wound_id, if_match, reason)
 
     def healing(self, principal: Principal, wound_id: str) -> WoundHealing:
         """The wound's track from its own analyses, and its measured share of the body beside the chart."""
