@@ -50,7 +50,7 @@ def test_wounds_are_recorded_on_the_patient_page_and_picked_for_pictures_and_ana
     # A wound with no region is refused with the reason, and nothing is stored.
     _, where = _record_wound(nurse, patient_id, label="somewhere")
     refused = nurse.get(where).text
-    assert "The wound was not recorded" in refused and "Wounds (2)" in refused
+    assert "Nothing was stored" in refused and "Wounds (2)" in refused
 
     pictures = nurse.get(f"/encounters/{encounter_id}/pictures").text
     assert f'<option value="{arm}"' in pictures and f'<option value="{thigh}"' in pictures
@@ -74,3 +74,41 @@ def test_wounds_are_recorded_on_the_patient_page_and_picked_for_pictures_and_ana
     )
     assert asked.status_code == 422
     assert "say which one this analysis measures" in asked.text and "left forearm" in asked.text
+
+
+def test_a_wound_is_marked_healed_on_the_patient_page_and_a_stale_form_is_refused(nurse, services):
+    patient_id = _new_patient(nurse, given_name="Ben", family_name="Ito", sex="male")
+    _new_encounter(nurse, patient_id)
+    wound_id, _ = _record_wound(nurse, patient_id, label="right hand", regions="hand_right_dorsal", side="right")
+    change = {
+        "version": "1",
+        "label": "right hand",
+        "regions": "hand_right_dorsal",
+        "side": "right",
+        "state": "healed",
+        "state_date": "2026-12-05",
+        "notes": "re-epithelialised",
+    }
+    r = post_form(nurse, f"/wounds/{wound_id}/edit", change, from_page=f"/patients/{patient_id}")
+    assert r.status_code == 303 and r.headers["location"].endswith(f"#wound-{wound_id}")
+    stored = (
+        services.db.connection()
+        .execute(
+            "SELECT v.version, v.data FROM record_heads h JOIN record_versions v ON v.seq = h.seq WHERE h.id = ?",
+            (wound_id,),
+        )
+        .fetchone()
+    )
+    assert stored[0] == 2 and '"state":"healed"' in stored[1] and '"state_date":"2026-12-05"' in stored[1]
+    page = nurse.get(f"/patients/{patient_id}").text
+    assert "healed on 2026-12-05" in page
+
+    stale = post_form(
+        nurse, f"/wounds/{wound_id}/edit", {**change, "notes": "older"}, from_page=f"/patients/{patient_id}"
+    )
+    shown = nurse.get(stale.headers["location"]).text
+    assert "Nothing was stored" in shown and "now at version 2" in shown
+
+    no_date = {**change, "version": "2", "state": "grafted", "state_date": ""}
+    refused = post_form(nurse, f"/wounds/{wound_id}/edit", no_date, from_page=f"/patients/{patient_id}")
+    assert "needs state_date" in nurse.get(refused.headers["location"]).text

@@ -22,7 +22,7 @@ from schemas.errors import InvalidInput
 from schemas.ids import uuid7
 from schemas.patient import Encounter, Patient
 from schemas.records import Record, RecordKind
-from schemas.wound import WoundSide
+from schemas.wound import WoundSide, WoundState
 
 Search = Annotated[str, QueryParameter(max_length=200, description="Part of a name or an identifier")]
 PATIENT_SKIP = frozenset({"id"})
@@ -92,6 +92,7 @@ class PatientPages(Controller):
             sections=sections,
             regions=list(LundBrowderRegion),
             sides=list(WoundSide),
+            states=list(WoundState),
             record_id=uuid7(),
             errors={"": problem} if (problem := request.query_params.get("wound_problem")) else {},
         )

@@ -1,4 +1,6 @@
-"""The wound form on the patient page: a nurse or clinician records one of the patient's burns as a wound."""
+"""The wound forms on the patient page: a nurse or clinician records one of the patient's burns as a wound, and
+changes one (its state as it heals or is grafted, its regions, its name). A change made from an older version than
+the stored one is refused, with the page showing the current version."""
 
 from __future__ import annotations
 
@@ -11,8 +13,9 @@ from base.web.pages.forms import FormBody
 from base.web.paths import IdPath
 from base.web.site import AuthedRequest
 from gateway.dependencies import ServicesDep
-from gateway.pages.common import parse_or_errors, posted_id, service_errors
-from schemas.errors import InvalidInput
+from gateway.pages.common import parse_or_errors, posted_id, posted_version, service_errors
+from schemas.errors import InvalidInput, VersionMismatch
+from schemas.records import RecordKind
 from schemas.wound import Wound
 
 
@@ -39,5 +42,25 @@ class WoundPages(Controller):
                 return Redirect(path=f"/patients/{patient_id}#wound-{record_id}", status_code=303)
             except InvalidInput as exc:
                 errors = service_errors(exc)
-        problems = "; ".join(f"{k + ': ' if k else ''}{v}" for k, v in errors.items())
-        return Redirect(path=f"/patients/{patient_id}", query_params={"wound_problem": problems}, status_code=303)
+        return _refused(patient_id, errors)
+
+    @post("/wounds/{wound_id:str}/edit", sync_to_thread=True, status_code=303)
+    def change(self, wound_id: IdPath, request: AuthedRequest, data: FormBody, services: ServicesDep) -> Redirect:
+        stored = services.records.get(request.user, RecordKind.wound, wound_id)
+        patient_id = stored.value().patient_id
+        body, errors = parse_or_errors(Wound, _wound_form(data), {"id": wound_id, "patient_id": patient_id})
+        if not errors:
+            try:
+                services.records.update(request.user, RecordKind.wound, wound_id, body, posted_version(data))
+                return Redirect(path=f"/patients/{patient_id}#wound-{wound_id}", status_code=303)
+            except VersionMismatch as exc:
+                errors = {"": f"{exc.detail} (the page now shows the current version)"}
+            except InvalidInput as exc:
+                errors = service_errors(exc)
+        return _refused(patient_id, errors)
+
+
+def _refused(patient_id: str, errors: dict[str, str]) -> Redirect:
+    """The patient page again, saying why nothing was stored."""
+    problems = "; ".join(f"{k + ': ' if k else ''}{v}" for k, v in errors.items())
+    return Redirect(path=f"/patients/{patient_id}", query_params={"wound_problem": problems}, status_code=303)
