@@ -87,8 +87,8 @@ def at_a_glance(pdf: ReportPDF, r: EncounterSnapshot) -> None:
         rows.append(
             (
                 name,
-                f"{figure(last.area_cm2, 'area_cm2')}{percent} on day {last.day:g} "
-                f"({len(measured)} measured visits; see Healing over time){flagged}",
+                f"{figure(last.area_cm2, 'area_cm2')}{percent} on day {last.day:.0f} "
+                f"({len(measured)} measured visit{'s' if len(measured) > 1 else ''}; see Healing over time){flagged}",
             )
         )
     support = r.decision_support.value if r.decision_support else None
