@@ -27,7 +27,7 @@ from base.storage.postgres import AnyDatabase
 from center.sealed_bundles import SealedBundles, chunk_name
 from center.storage import cases, notes, transfers
 from schemas.base import iso, utcnow
-from schemas.central import Announcement, SealedAtRest
+from schemas.central import Announcement, RefusedBundle, SealedAtRest
 from schemas.config import CentralConfig
 from schemas.errors import DuplicateRow, TransferRejected
 from schemas.transfer import (
@@ -77,6 +77,7 @@ class Receiver:
                 manifest.bundle_id,
             )
             return AnnounceReply(status="stored", receipt=receipt)
+        self._check_not_refused(conn, site_id, manifest.bundle_id)
         self._check_version(conn, site_id, manifest)
         body_sha = hashlib.sha256(envelope.body).hexdigest()
         with self.db.write() as conn:
@@ -168,8 +169,8 @@ class Receiver:
                 return CommitReply(status="stored", receipt=stored)
             (folder / chunk_name(damaged.index)).unlink(missing_ok=True)
             return CommitReply(status="missing", missing=[damaged.index])
-        except TransferRejected:
-            self._drop_incoming(site_id, bundle_id)  # the bundle itself is bad: nothing of it is kept
+        except TransferRejected as refused:
+            self._refuse(site_id, bundle_id, refused)  # the bundle itself is bad: nothing of it is kept
             raise
         return CommitReply(status="stored", receipt=receipt)
 
@@ -307,6 +308,8 @@ class Receiver:
                 cutoff,
             )
         self.bundles.sweep_unfinished(older_than_s=days * 86400)
+        with self.db.write() as conn:
+            transfers.forget_refusals_before(conn, cutoff)
         return len(stale)
 
     # checks -------------------------------------------------------------------------
@@ -366,10 +369,26 @@ class Receiver:
         return manifest
 
     def _announcement(self, site_id: str, bundle_id: str) -> Announcement:
-        announced = transfers.find_announcement(self.db.connection(), site_id, bundle_id)
+        conn = self.db.connection()
+        announced = transfers.find_announcement(conn, site_id, bundle_id)
         if announced is None:
+            self._check_not_refused(conn, site_id, bundle_id)
             raise TransferRejected(f"bundle {bundle_id} from {site_id} was never announced", code="unannounced")
         return announced
+
+    def _check_not_refused(self, conn, site_id: str, bundle_id: str) -> None:
+        refusal = transfers.find_refusal(conn, site_id, bundle_id)
+        if refusal is not None:
+            raise TransferRejected(
+                f"bundle {bundle_id} was refused at {refusal.refused_at}: {refusal.reason}", code=refusal.code
+            )
+
+    def _refuse(self, site_id: str, bundle_id: str, refused: TransferRejected) -> None:
+        refusal = RefusedBundle(site_id, bundle_id, refused.code, refused.detail, iso(utcnow()))
+        with self.db.write() as conn:
+            transfers.refuse(conn, refusal)
+        shutil.rmtree(self.staging / site_id / bundle_id, ignore_errors=True)
+        self._manifests.pop((site_id, bundle_id), None)
 
     def _held(self, site_id: str, manifest: TransferManifest) -> list[int]:
         folder = self.staging / site_id / manifest.bundle_id

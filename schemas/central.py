@@ -159,6 +159,16 @@ class StoredPart(Frozen):
     """Where the file starts in the bundle's plaintext."""
 
 
+class RefusedBundle(Frozen):
+    """A bundle refused whole at its commit: what the clinic is told again if it asks about it again."""
+
+    site_id: str
+    bundle_id: str
+    code: str
+    reason: str
+    refused_at: str
+
+
 class Announcement(Frozen):
     """A transfer a clinic announced and has not committed yet."""
 

@@ -92,6 +92,7 @@ def test_migrations_apply_once_and_a_second_open_finds_nothing_to_do(center, cen
                 "c003_must_change_password",
                 "c004_case_queue",
                 "c005_sealed_at_rest",
+                "c006_refused_bundles",
             ]
     finally:
         again.close()

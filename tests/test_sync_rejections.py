@@ -140,6 +140,10 @@ def test_every_bad_input_is_refused_and_nothing_partial_is_stored(tmp_path: Path
             for i, data in enumerate(chunks):
                 clinic.chunk(broken_id, i, hashlib.sha256(data).hexdigest(), data)
             refused(lambda: clinic.ask(clinic.link.commit(CLINIC, broken_id), b""), "chunk-forged")
+            # Asked again (its answer lost on the way), or announced again: told the same reason, not "never announced".
+            again = refused(lambda: clinic.ask(clinic.link.commit(CLINIC, broken_id), b""), "chunk-forged")
+            assert "was refused at" in again
+            refused(lambda: clinic.announce(bad_env), "chunk-forged")
     finally:
         sites.center.stop()
 

@@ -153,12 +153,30 @@ def c005_sealed_at_rest(db: Database) -> None:
     db.execute("ALTER TABLE bundle_parts ADD COLUMN plain_offset INTEGER")
 
 
+def c006_refused_bundles(db: Database) -> None:
+    """Bundles refused whole at commit, with the reason: a commit sent again (its answer lost on the way, or taken
+    by two workers at once) is told the same reason rather than that the bundle was never announced."""
+    db.execute(
+        """
+        CREATE TABLE refused_bundles (
+            site_id TEXT NOT NULL,
+            bundle_id TEXT NOT NULL,
+            code TEXT NOT NULL,
+            reason TEXT NOT NULL,
+            refused_at TEXT NOT NULL,
+            PRIMARY KEY (site_id, bundle_id)
+        )"""
+    )
+    db.execute("CREATE INDEX refused_bundles_at ON refused_bundles (refused_at)")
+
+
 CENTER_STEPS = (
     c001_center,
     c002_audit_anchors,
     c003_must_change_password,
     c004_case_queue,
     c005_sealed_at_rest,
+    c006_refused_bundles,
 )
 central_migrations = Migrations(CENTRAL_SET)
 for _step in CENTER_STEPS:
