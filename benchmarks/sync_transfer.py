@@ -27,12 +27,14 @@ import statistics
 import tempfile
 import threading
 import time
+from functools import partial
 from pathlib import Path
 
 import msgspec
 import zenoh
 
 from base.folders import keys_dir
+from gateway.records.snapshot import current_snapshot
 from gateway.storage.database import Database
 from harness.processes import FAST_HASH_ENV, free_port
 from harness.sites import Sites, record_case
@@ -75,7 +77,9 @@ def bundle_runs(sites: Sites, encounter_ids: list[str], chunk_kib: int, window: 
     try:
         for encounter_id in encounter_ids:
             t0 = time.perf_counter()
-            entry = Outbox(db, config).queue(keys, encounter_id, "bench")
+            entry = Outbox(db, config).queue(
+                keys, partial(current_snapshot, db, config, encounter_id, "bench"), "bench"
+            )
             t1 = time.perf_counter()
             report = Sender(db, config, keys).run_round()
             t2 = time.perf_counter()

@@ -145,10 +145,10 @@ def cmd_sync_now(args, config: Config) -> int:
 
 
 def cmd_sync_send(args, config: Config) -> int:
-    from sync.service import SyncService
+    from gateway.dependencies import Services
 
     with site_database(config, False) as db:
-        _print(SyncService(db, config).queue(args.encounter_id, args.by))
+        _print(Services.build(config, db).transfers.queue(args.encounter_id, args.by))
     return 0
 
 

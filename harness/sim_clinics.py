@@ -22,6 +22,7 @@ from pathlib import Path
 from base.accounts.permissions import Principal
 from base.folders import keys_dir
 from gateway.records.service import RecordService
+from gateway.records.snapshot import current_snapshot
 from gateway.storage.database import Database
 from harness.bodies import encounter_body, patient_body
 from schemas.accounts import Role
@@ -74,7 +75,11 @@ class SimClinic:
         encounter = encounter_body(patient["id"])
         records.create(CLINICIAN, RecordKind.encounter, encounter["id"], encounter)
         photo = random.Random(seed).randbytes(photo_bytes)
-        entry = self.sync.queue(encounter["id"], "sim", (PartData("photos/case.jpg", photo),))
+        entry = self.sync.queue(
+            lambda: current_snapshot(self.db, self.config, encounter["id"], "sim"),
+            "sim",
+            lambda _: (PartData("photos/case.jpg", photo),),
+        )
         self.queued[entry.bundle_id] = (time.monotonic(), photo_bytes, seed)
         return entry.bundle_id
 

@@ -1,26 +1,25 @@
 """What a clinic sends for an encounter: its record, its finished analyses with the files that matter, and a
-summary for the consultant's case list, read in one snapshot of the gateway's database."""
+summary for the consultant's case list, all from the one encounter snapshot the gateway read
+(schemas/encounter_snapshot.py), the report in the bundle made from the same one."""
 
 from __future__ import annotations
 
 import sqlite3
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import msgspec
 
 from base import folders
 from base.folders import media_root
 from base.storage import assets as asset_rows
-from base.storage import records as store
 from base.storage.blobs import MediaStore
 from schemas.base import iso, utcnow
 from schemas.clinical_results import Assessment, ReferralTier
 from schemas.config import Config
+from schemas.encounter_snapshot import AnalysisVisit, EncounterSnapshot
 from schemas.jobs import BurnAnalysis
-from schemas.patient import Encounter
-from schemas.records import ENCOUNTER_PARTS, EncounterRecord, Record, RecordKind
+from schemas.records import EncounterRecord
 from schemas.transfer import BundleManifest, CaseSummary, CaseWound, Urgency
-from schemas.wound import Wound
 from sync.bundle import PartData
 
 ANALYSIS_FILES = (
@@ -36,97 +35,88 @@ and the PDF report when there is one."""
 
 @dataclass(frozen=True)
 class Snapshot:
+    encounter: EncounterSnapshot
     record: EncounterRecord
-    analyses: list[Record]
-    """The encounter's finished analyses (`burn_analysis` records)."""
+    """The encounter and its parts as stored (record.json)."""
     parts: list[PartData]
-    wounds: list[Record] = field(default_factory=list)
-    """The patient's live wounds (`wound` records), oldest first."""
 
 
-def snapshot(conn: sqlite3.Connection, config: Config, encounter_id: str, extra: tuple[PartData, ...] = ()) -> Snapshot:
-    """The encounter's record and every part to send (record, patient, the patient's wounds, analyses with their
-    files, photos), and `extra` (the clinical report, report.pdf; the wounds' healing, healing.json)."""
-    encounter = store.get_head(conn, RecordKind.encounter, encounter_id)
-    record = EncounterRecord(encounter=encounter, parts=store.heads_of_children(conn, encounter_id, ENCOUNTER_PARTS))
-    patient_id = _encounter(encounter).patient_id
-    patient = store.get_head(conn, RecordKind.patient, patient_id)
-    wounds = [
-        w for w in store.list_heads(conn, RecordKind.wound, parent_id=patient_id, limit=None) if not w.meta.deleted
-    ]
+def snapshot(
+    conn: sqlite3.Connection, config: Config, encounter: EncounterSnapshot, extra: tuple[PartData, ...] = ()
+) -> Snapshot:
+    """Every part to send of the encounter as `encounter` read it (record, patient, the patient's wounds, analyses
+    with their files), its photos (read here, in `conn`) and `extra` (the clinical report, report.pdf; the wounds'
+    healing, healing.json)."""
+    record = EncounterRecord(
+        encounter=encounter.encounter.record,
+        parts={kind: part.record for kind, part in encounter.parts().items()},
+    )
     parts = [
         PartData("record.json", msgspec.json.encode(record)),
-        PartData("patient.json", msgspec.json.encode(patient)),
-        PartData("wounds.json", msgspec.json.encode(wounds)),
+        PartData("patient.json", msgspec.json.encode(encounter.patient.record)),
+        PartData("wounds.json", msgspec.json.encode([w.record for w in encounter.wounds])),
     ]
-    analyses = store.list_heads(conn, RecordKind.burn_analysis, parent_id=encounter_id, limit=None)
-    for analysis in analyses:
-        job_id = analysis.meta.id
-        parts.append(PartData(f"analyses/{job_id}/record.json", msgspec.json.encode(analysis)))
-        folder = folders.analysis_dir(config, job_id)
-        for name in folders.matching_files(folder, ANALYSIS_FILES):
-            parts.append(PartData(f"analyses/{job_id}/{name}", (folder / name).read_bytes()))
+    for visit in encounter.encounter_analyses:
+        job_id = visit.analysis.ref.id
+        parts.append(PartData(f"analyses/{job_id}/record.json", msgspec.json.encode(visit.analysis.record)))
+        for name in folders.matching_files(visit.folder, ANALYSIS_FILES):
+            parts.append(PartData(f"analyses/{job_id}/{name}", (visit.folder / name).read_bytes()))
+    encounter_id = encounter.encounter.value.id
     parts += _pictures(conn, MediaStore(media_root(config)), encounter_id, config.sync.pictures)
     parts += extra
-    return Snapshot(record=record, analyses=analyses, parts=parts, wounds=wounds)
+    return Snapshot(encounter=encounter, record=record, parts=parts)
 
 
-def summarize(snap: Snapshot) -> CaseSummary:
+def summarize(snap: EncounterSnapshot) -> CaseSummary:
     """Urgency from the referral assessment computed at the clinic, and the headline figures."""
-    assessment_record = snap.record.parts.get(RecordKind.assessment)
-    assessment = msgspec.convert(assessment_record.data, Assessment) if assessment_record else None
+    assessment = snap.assessment.value if snap.assessment else None
     urgency, reasons = _urgency(assessment)
-    analyses = sorted((msgspec.convert(a.data, BurnAnalysis) for a in snap.analyses), key=lambda a: a.completed_at)
-    latest = _latest_scaled(analyses)
+    latest = _latest_scaled(snap.encounter_analyses)
     return CaseSummary(
         urgency=urgency,
         urgency_reasons=reasons,
-        encounter_mode=_encounter(snap.record.encounter).mode.value,
+        encounter_mode=snap.encounter.value.mode.value,
         age_years=assessment.age_years if assessment else None,
         tbsa_percent=assessment.tbsa.tbsa_percent if assessment and assessment.tbsa else None,
-        analyses=len(analyses),
+        analyses=len(snap.encounter_analyses),
         area_cm2=latest.result.metrics.area_cm2 if latest else None,
         analysis_confidence=latest.result.confidence.level if latest and latest.result.confidence else None,
-        wounds=_case_wounds(snap.wounds, analyses),
+        wounds=_case_wounds(snap),
     )
 
 
 def manifest_for(
     snap: Snapshot, *, bundle_id: str, site_id: str, version: int, supersedes: str | None, created_by: str
 ) -> BundleManifest:
-    encounter = snap.record.encounter
+    encounter = snap.encounter.encounter.value
     return BundleManifest(
         bundle_id=bundle_id,
         site_id=site_id,
-        patient_id=_encounter(encounter).patient_id,
-        encounter_id=encounter.meta.id,
+        patient_id=encounter.patient_id,
+        encounter_id=encounter.id,
         version=version,
         supersedes=supersedes,
         created_at=iso(utcnow()),
         created_by=created_by,
-        summary=summarize(snap),
+        summary=summarize(snap.encounter),
         parts=[p.described for p in snap.parts],
     )
 
 
-def _encounter(record: Record) -> Encounter:
-    return msgspec.convert(record.data, Encounter)
-
-
-def _latest_scaled(analyses: list[BurnAnalysis]) -> BurnAnalysis | None:
-    """The last of `analyses` (oldest first) measured with a metric scale."""
-    scaled = [a for a in analyses if a.result.metrics.area_cm2 is not None]
+def _latest_scaled(visits: list[AnalysisVisit]) -> BurnAnalysis | None:
+    """The analysis of the last of `visits` (oldest first) measured with a metric scale; None when none was."""
+    scaled = [v.analysis.value for v in visits if v.analysis.value.result.metrics.area_cm2 is not None]
     return scaled[-1] if scaled else None
 
 
-def _case_wounds(wounds: list[Record], analyses: list[BurnAnalysis]) -> list[CaseWound]:
+def _case_wounds(snap: EncounterSnapshot) -> list[CaseWound]:
     """Each wound with this encounter's analyses of it (oldest first); an analysis of no wound is the wound's when
-    the patient has only one (the gateway's job row holds the rest, which sync does not read)."""
-    only = wounds[0].meta.id if len(wounds) == 1 else None
+    the patient has only one."""
+    only = snap.wounds[0].ref.id if len(snap.wounds) == 1 else None
     shown = []
-    for record in wounds:
-        wound = msgspec.convert(record.data, Wound)
-        own = [a for a in analyses if (a.wound_id or only) == wound.id]
+    for versioned in snap.wounds:
+        wound = versioned.value
+        own = [v for v in snap.encounter_analyses if (v.wound_id or only) == wound.id]
         latest = _latest_scaled(own)
         shown.append(
             CaseWound(

@@ -13,7 +13,7 @@ import os
 import shutil
 import threading
 import uuid
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 
 import msgspec
 
@@ -23,6 +23,7 @@ from base.storage.database import Database
 from base.storage.durable import fsync_dir
 from schemas.base import iso, utcnow
 from schemas.config import Config
+from schemas.encounter_snapshot import EncounterSnapshot
 from schemas.errors import Conflict, DuplicateRow
 from schemas.transfer import (
     PROTOCOL,
@@ -52,17 +53,25 @@ class Outbox:
         self.root = outbox_root(config)
 
     def queue(
-        self, keys: SiteKeys, encounter_id: str, user: str, extra: tuple[bundle.PartData, ...] = ()
+        self,
+        keys: SiteKeys,
+        encounter: Callable[[], EncounterSnapshot],
+        user: str,
+        extra: Callable[[EncounterSnapshot], tuple[bundle.PartData, ...]] = lambda _: (),
     ) -> OutboxEntry:
-        """Seal the encounter as it stands now and queue it; a repeat with nothing changed returns the last one.
-        `extra`: parts made outside the snapshot that travel with it (the clinical report)."""
+        """Seal the encounter as `encounter()` reads it now and queue it; a repeat with nothing changed returns the
+        last one. `extra`: the parts made from the same reading that travel with it (the clinical report, the
+        wounds' healing). Read under the queue's lock, so a later version never carries an earlier reading."""
         with _queue_lock:  # one bundle version at a time per gateway: versions are counted, not raced
+            read = encounter()
+            made = extra(read)
+            encounter_id = read.encounter.value.id
             with self.db.read() as conn:
                 center = peers.only_center(conn, self.config.sync.center_id)
-                snap = case_snapshot.snapshot(conn, self.config, encounter_id, extra)
+                snap = case_snapshot.snapshot(conn, self.config, read, made)
                 # Derived parts (the report) change with the clock and the center's own notes: only the record
                 # and its files decide whether the case changed.
-                derived = {part.name for part in extra}
+                derived = {part.name for part in made}
                 digest = _content_digest([part for part in snap.parts if part.name not in derived])
                 last = store.latest(conn, center.site_id, encounter_id)
             if last is not None and last.content_digest == digest:

@@ -11,11 +11,13 @@ import datetime as dt
 import logging
 import random
 import threading
+from collections.abc import Callable
 
 from base.folders import keys_dir
 from base.storage.database import Database
 from schemas.base import iso, utcnow
 from schemas.config import Config
+from schemas.encounter_snapshot import EncounterSnapshot
 from schemas.errors import BurnedgeError
 from schemas.transfer import OutboxEntry, SyncStatus
 from sync import peers
@@ -41,8 +43,14 @@ class SyncService:
     def keys(self) -> SiteKeys:
         return load_keys(keys_dir(self.config))
 
-    def queue(self, encounter_id: str, user: str, extra: tuple[PartData, ...] = ()) -> OutboxEntry:
-        return self.outbox.queue(self.keys(), encounter_id, user, extra)
+    def queue(
+        self,
+        encounter: Callable[[], EncounterSnapshot],
+        user: str,
+        extra: Callable[[EncounterSnapshot], tuple[PartData, ...]] = lambda _: (),
+    ) -> OutboxEntry:
+        """Queue the encounter as `encounter()` reads it, with `extra` made from that reading (Outbox.queue)."""
+        return self.outbox.queue(self.keys(), encounter, user, extra)
 
     def run_round(self, *, force: bool = False) -> RoundReport | None:
         """One round unless the backoff says wait (`force` ignores it); None when skipped or already running."""

@@ -13,10 +13,11 @@ import datetime as dt
 import msgspec
 
 from processing.clinical.assessment import assess
-from processing.clinical.decision_inputs import DecisionInputs, Versioned
+from processing.clinical.decision_inputs import DecisionInputs
 from schemas.burn_chart import BurnChart, BurnChartEntry, BurnDepth, LundBrowderRegion
 from schemas.clinical_results import InputRef
 from schemas.config import ClinicalConfig
+from schemas.encounter_snapshot import Versioned
 from schemas.ids import uuid7
 from schemas.patient import Encounter, EncounterMode, Patient
 from schemas.record_parts import (

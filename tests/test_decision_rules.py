@@ -9,10 +9,10 @@ import msgspec
 import pytest
 
 from processing.clinical import decision_support, follow_up, infection, pain, wound_care
-from processing.clinical.decision_inputs import Versioned
 from schemas.burn_chart import BurnChart, BurnChartEntry, BurnDepth, LundBrowderRegion
 from schemas.clinical_results import InputRef
 from schemas.decision_support import RecommendationAct, RecommendationState
+from schemas.encounter_snapshot import Versioned
 from schemas.errors import InvalidInput
 from schemas.record_parts import Allergy, Exposure, PrimarySurvey
 from tests.test_decision_tetanus import INJURY, _inputs

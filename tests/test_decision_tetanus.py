@@ -7,9 +7,10 @@ import datetime as dt
 import pytest
 
 from processing.clinical import tetanus
-from processing.clinical.decision_inputs import DecisionInputs, Versioned
+from processing.clinical.decision_inputs import DecisionInputs
 from processing.clinical.tetanus import Wound, table_cell
 from schemas.clinical_results import InputRef
+from schemas.encounter_snapshot import Versioned
 from schemas.ids import uuid7
 from schemas.patient import Encounter, EncounterMode, Patient
 from schemas.record_parts import Intake, TetanusDoses, TetanusStatus

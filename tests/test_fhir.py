@@ -11,12 +11,11 @@ from pathlib import Path
 import pytest
 
 from harness.bodies import encounter_body, now, patient_body
-from processing.clinical.decision_inputs import Versioned
 from processing.fhir import codes, record, wound
 from processing.fhir.bundle import model_of
-from processing.snapshot import AnalysisVisit
 from schemas.analysis import AnalysisResult, AnalysisStatus, BurnMetrics
 from schemas.clinical_results import InputRef
+from schemas.encounter_snapshot import AnalysisVisit, Versioned
 from schemas.ids import uuid7
 from schemas.jobs import BurnAnalysis
 from schemas.transfer import Consultation, ConsultationNote, Recommendation

@@ -25,8 +25,8 @@ def _as_an_older_clinic(real):
     """The snapshot an older clinic version would send: no decision support, an intake without the newer tetanus
     fields (the record.json of that version), no wounds or their healing."""
 
-    def snapshot(conn, config, encounter_id, extra=()):
-        snap = real(conn, config, encounter_id, extra)
+    def snapshot(conn, config, encounter, extra=()):
+        snap = real(conn, config, encounter, extra)
         parts = {k: v for k, v in snap.record.parts.items() if k is not RecordKind.decision_support}
         intake = parts[RecordKind.intake]
         older = {k: v for k, v in intake.data.items() if k not in NEWER_INTAKE_FIELDS}
@@ -34,7 +34,7 @@ def _as_an_older_clinic(real):
         record = msgspec.structs.replace(snap.record, parts=parts)
         encoded = PartData("record.json", msgspec.json.encode(record))
         files = [encoded if p.name == "record.json" else p for p in snap.parts if p.name not in WOUND_PARTS]
-        return case_snapshot.Snapshot(record=record, analyses=snap.analyses, parts=files)
+        return case_snapshot.Snapshot(encounter=snap.encounter, record=record, parts=files)
 
     return snapshot
 
@@ -42,8 +42,8 @@ def _as_an_older_clinic(real):
 def _stored_before_urgent_first(real):
     """The snapshot of a clinic version whose rules did not sort urgent first: the stored order, urgent last."""
 
-    def snapshot(conn, config, encounter_id, extra=()):
-        snap = real(conn, config, encounter_id, extra)
+    def snapshot(conn, config, encounter, extra=()):
+        snap = real(conn, config, encounter, extra)
         stored = snap.record.parts[RecordKind.decision_support]
         recs = sorted(stored.data["recommendations"], key=lambda r: r["urgent"])
         parts = {
@@ -53,7 +53,7 @@ def _stored_before_urgent_first(real):
         record = msgspec.structs.replace(snap.record, parts=parts)
         encoded = PartData("record.json", msgspec.json.encode(record))
         files = [encoded if p.name == "record.json" else p for p in snap.parts]
-        return case_snapshot.Snapshot(record=record, analyses=snap.analyses, parts=files)
+        return case_snapshot.Snapshot(encounter=snap.encounter, record=record, parts=files)
 
     return snapshot
 

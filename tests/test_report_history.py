@@ -11,11 +11,10 @@ import pytest
 
 from harness.bodies import encounter_body, now, patient_body
 from harness.report_pages import page_texts, rasterise
-from processing.clinical.decision_inputs import Versioned
 from processing.report.document import render
-from processing.snapshot import EncounterSnapshot
 from schemas.clinical_results import InputRef
 from schemas.decision_support import DecisionSupport, Recommendation, RecommendationCategory, Source
+from schemas.encounter_snapshot import EncounterSnapshot, Versioned
 from schemas.ids import uuid7
 from schemas.patient import Encounter, Patient
 
@@ -136,7 +135,7 @@ def test_urgent_recommendations_come_first_even_when_stored_after_the_others():
         encounter_id=encounter.id, computed_at=now(), as_of=now(), inputs=[], recommendations=[routine, urgent]
     )
     inputs = EncounterSnapshot(
-        report_id=uuid7(),
+        snapshot_id=uuid7(),
         made_at=now(),
         made_by="test",
         software_version="test",

@@ -19,10 +19,10 @@ from base.storage.blobs import MediaStore
 from gateway.documents.reports import REPORT_KINDS, ReportService
 from processing.fhir import bundle as fhir_bundle
 from processing.fhir.wound import Attached, attached
-from processing.snapshot import AnalysisVisit
 from schemas.analysis import SegmentationRecord
 from schemas.capture import Asset
 from schemas.config import Config
+from schemas.encounter_snapshot import AnalysisVisit
 from schemas.errors import NotFound
 from schemas.records import RecordKind
 

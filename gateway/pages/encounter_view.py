@@ -1,12 +1,10 @@
-"""What the encounter pages show, read once per request through the services: the encounter with its parts, the
-calculators' results, the recommendations, the burn center's traffic."""
+"""What the encounter pages show, read once per request through the services: the encounter's snapshot (its parts,
+the calculators' results, the recommendations, the consultants' advice) and the burn center's traffic."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 from typing import Any
-
-import msgspec
 
 from base.accounts.permissions import Principal
 from base.web.pages.forms_spec import human, struct_fields
@@ -14,8 +12,10 @@ from base.web.pages.rendering import patient_name
 from gateway.dependencies import Services
 from schemas.clinical_results import Assessment
 from schemas.decision_support import DecisionSupport
-from schemas.errors import Forbidden, NotFound
+from schemas.encounter_snapshot import EncounterSnapshot
+from schemas.errors import Forbidden
 from schemas.records import RECORD_TYPES, Record, RecordKind
+from schemas.transfer import Consultation, OutboxEntry
 
 PART_PAGES = {
     "intake": RecordKind.intake,
@@ -63,18 +63,46 @@ def older_shown(kind: RecordKind, data: dict | None) -> list[tuple[str, str]]:
 
 @dataclass
 class EncounterView:
-    encounter: Record
-    patient: Record
-    parts: dict[RecordKind, Record]
-    assessment: Assessment | None
-    decision_support: DecisionSupport | None
-    decision_support_version: int = 0
-    transfers: list = field(default_factory=list)
-    consultations: list[Record] = field(default_factory=list)
+    """The encounter's overview, made from one reading of its record (schemas/encounter_snapshot.py) and the
+    transfers of it to the burn center."""
+
+    snapshot: EncounterSnapshot
+    transfers: list[OutboxEntry] = field(default_factory=list)
+
+    @property
+    def encounter(self) -> Record:
+        return self.snapshot.encounter.record
+
+    @property
+    def patient(self) -> Record:
+        return self.snapshot.patient.record
 
     @property
     def patient_name(self) -> str:
         return patient_name(self.patient.data)
+
+    @property
+    def parts(self) -> dict[RecordKind, Record]:
+        """The parts recorded so far, as stored (their version, who saved them and when)."""
+        return {kind: part.record for kind, part in self.snapshot.parts().items()}
+
+    @property
+    def assessment(self) -> Assessment | None:
+        return self.snapshot.assessment.value if self.snapshot.assessment else None
+
+    @property
+    def decision_support(self) -> DecisionSupport | None:
+        support = self.snapshot.decision_support
+        return support.value if support else None
+
+    @property
+    def decision_support_version(self) -> int:
+        support = self.snapshot.decision_support
+        return support.ref.version if support else 0
+
+    @property
+    def consultations(self) -> list[Consultation]:
+        return [c.value for c in self.snapshot.consultations]
 
 
 def encounter_header(services: Services, who: Principal, encounter_id: str) -> tuple[Record, Record]:
@@ -85,31 +113,9 @@ def encounter_header(services: Services, who: Principal, encounter_id: str) -> t
 
 
 def encounter_view(services: Services, who: Principal, encounter_id: str) -> EncounterView:
-    encounter, patient = encounter_header(services, who, encounter_id)
-    record = services.records.encounter_record(who, encounter_id)
-    parts = dict(record.parts)
-    assessment_record = parts.get(RecordKind.assessment)
-    assessment = msgspec.convert(assessment_record.data, Assessment) if assessment_record else None
-    support, support_version = None, 0
-    try:
-        support_record = services.decision_support.get(who, encounter_id)
-        support = msgspec.convert(support_record.data, DecisionSupport)
-        support_version = support_record.meta.version
-    except (NotFound, Forbidden):
-        pass
-    transfers, consultations = [], []
+    snapshot = services.records.snapshot(who, encounter_id)
     try:
         transfers = services.transfers.transfers(who, encounter_id)
-        consultations = services.transfers.consultations(who, encounter_id)
     except Forbidden:
-        pass
-    return EncounterView(
-        encounter=encounter,
-        patient=patient,
-        parts=parts,
-        assessment=assessment,
-        decision_support=support,
-        decision_support_version=support_version,
-        transfers=transfers,
-        consultations=consultations,
-    )
+        transfers = []
+    return EncounterView(snapshot=snapshot, transfers=transfers)

@@ -7,92 +7,38 @@ only when the advice changed; acts are carried over as processing/clinical/decis
 
 from __future__ import annotations
 
-import datetime as dt
 import sqlite3
 
 import msgspec
 
 from base.accounts.permissions import Principal, require_decide, require_read, require_write
 from base.storage import records as store
-from gateway.jobs import timeline
 from gateway.records.computed import store_computed
-from gateway.storage import jobs
+from gateway.records.snapshot import read_snapshot
 from processing.clinical import decision_support as rules
-from processing.clinical.decision_inputs import DecisionInputs, Versioned, WoundTrack
+from processing.clinical.decision_inputs import decision_inputs
 from schemas.base import utcnow
-from schemas.clinical_results import InputRef
 from schemas.config import Config
 from schemas.decision_support import DecisionSupport, RecommendationAct
+from schemas.encounter_snapshot import EncounterSnapshot
 from schemas.errors import Conflict, NotFound, VersionMismatch
-from schemas.longitudinal import TrackResult
-from schemas.records import RECORD_TYPES, Record, RecordKind
+from schemas.records import Record, RecordKind
 
 KIND = RecordKind.decision_support
-_PARTS = {
-    RecordKind.intake: "intake",
-    RecordKind.primary_survey: "primary",
-    RecordKind.secondary_survey: "secondary",
-    RecordKind.mechanism: "mechanism",
-    RecordKind.burn_chart: "chart",
-    RecordKind.resuscitation: "resuscitation",
-    RecordKind.assessment: "assessment",
-}
-
-
-def versioned(record: Record) -> Versioned:
-    value = msgspec.convert(record.data, RECORD_TYPES[record.meta.kind])
-    return Versioned(value, InputRef(kind=record.meta.kind.value, id=record.meta.id, version=record.meta.version))
-
-
-def _tracks(conn: sqlite3.Connection, config: Config, patient_id: str) -> list[WoundTrack]:
-    """Each wound's stored track (and one for analyses of no wound), with the analyses it was made from."""
-    heads = store.list_heads(conn, RecordKind.wound, parent_id=patient_id, limit=None)
-    wounds: list[tuple[str | None, str]] = [(w.meta.id, w.value().label) for w in heads if not w.meta.deleted]
-    if any(job.wound_id is None for job in jobs.measured(conn, patient_id)):
-        wounds.append((None, "burn"))
-    out = []
-    for wound_id, label in wounds:
-        path = timeline.track_path(conn, config, patient_id, wound_id)
-        if path is None:
-            continue
-        track = msgspec.json.decode(path.read_bytes(), type=TrackResult)
-        refs = []
-        for session in track.sessions:
-            job_id = timeline.job_of(session.analysis)
-            head = store.find_head(conn, RecordKind.burn_analysis, job_id)
-            if head is not None:
-                refs.append(InputRef(kind=head.meta.kind.value, id=job_id, version=head.meta.version))
-        out.append(WoundTrack(label=label, track=track, refs=refs, wound_id=wound_id))
-    return out
-
-
-def gather(conn: sqlite3.Connection, config: Config, encounter_id: str, as_of: dt.datetime) -> DecisionInputs:
-    """What the rules read, from the current versions of the encounter's record."""
-    encounter = store.get_head(conn, RecordKind.encounter, encounter_id)
-    patient = store.get_head(conn, RecordKind.patient, encounter.value().patient_id)
-    heads = store.heads_of_children(conn, encounter_id, _PARTS)
-    parts = {_PARTS[kind]: versioned(r) for kind, r in heads.items() if not r.meta.deleted}
-    assessment = parts.get("assessment")
-    analyses = [
-        versioned(r)
-        for r in store.list_heads(conn, RecordKind.burn_analysis, parent_id=encounter_id, limit=None)
-        if not r.meta.deleted
-    ]
-    return DecisionInputs(
-        patient=versioned(patient),
-        encounter=versioned(encounter),
-        as_of=as_of,
-        age_years=assessment.value.age_years if assessment else None,
-        analyses=analyses,
-        tracks=_tracks(conn, config, patient.meta.id),
-        **parts,
-    )
 
 
 def refresh(conn: sqlite3.Connection, principal: Principal | None, encounter_id: str, config: Config) -> Record:
     """Recompute the encounter's decision support as of now; store a new version if the advice changed."""
-    now = utcnow()
-    fresh = rules.recommend(gather(conn, config, encounter_id, now), computed_at=now)
+    snapshot = read_snapshot(conn, config, encounter_id, utcnow(), principal.username if principal else "gateway")
+    return refresh_from(conn, principal, snapshot)
+
+
+def refresh_from(conn: sqlite3.Connection, principal: Principal | None, snapshot: EncounterSnapshot) -> Record:
+    """Decision support recomputed from a snapshot read in this transaction, as of its reading; a new version is
+    stored only if the advice changed."""
+    now = snapshot.made_at
+    fresh = rules.recommend(decision_inputs(snapshot), computed_at=now)
+    encounter_id = snapshot.encounter.value.id
     current = store.find_head(conn, KIND, encounter_id)
     previous = msgspec.convert(current.data, DecisionSupport) if current else None
     result = rules.carry_over(previous, fresh)

@@ -24,9 +24,11 @@ from base.storage import audit
 from base.storage import records as store
 from gateway.records import validation
 from gateway.records.assessments import refresh_assessments
+from gateway.records.snapshot import SNAPSHOT_KINDS, current_snapshot
 from gateway.storage.database import Database
 from schemas.base import iso
 from schemas.config import Config
+from schemas.encounter_snapshot import EncounterSnapshot
 from schemas.errors import Conflict, InvalidInput, VersionMismatch
 from schemas.records import ENCOUNTER_PARTS, PATIENT_RECORDS, EncounterRecord, Record, RecordKind
 
@@ -87,6 +89,12 @@ class RecordService:
         with self.db.read() as conn:
             encounter = store.get_head(conn, RecordKind.encounter, encounter_id)
             return EncounterRecord(encounter=encounter, parts=store.heads_of_children(conn, encounter_id, kinds))
+
+    def snapshot(self, principal: Principal, encounter_id: str) -> EncounterSnapshot:
+        """The encounter as it stands now, in one reading (decision support as last stored): what its pages show."""
+        for kind in SNAPSHOT_KINDS:
+            require_read(principal, kind)
+        return current_snapshot(self.db, self.config, encounter_id, principal.username)
 
     # writes --------------------------------------------------------------------
     def create(self, principal: Principal, kind: RecordKind, record_id: str, data: object) -> WriteOutcome:

@@ -8,13 +8,13 @@ from base.accounts.permissions import Principal, require_read
 from base.storage import records as store
 from gateway.documents.reports import ReportService
 from gateway.storage.database import Database
-from gateway.wounds.healing import patient_healing
 from schemas.accounts import Role
 from schemas.config import Config
+from schemas.encounter_snapshot import EncounterSnapshot
 from schemas.errors import Forbidden
-from schemas.patient import Encounter
 from schemas.records import Record, RecordKind
 from schemas.transfer import OutboxEntry, SyncStatus
+from schemas.wound_healing import PatientHealing
 from sync.bundle import PartData
 from sync.service import SyncService
 
@@ -33,16 +33,20 @@ class TransferService:
         if who.role not in SENDERS:
             raise Forbidden("only a clinician may send a case to the burn center")
         require_read(who, RecordKind.encounter)
-        conn = self.db.connection()
-        encounter = store.get_head(conn, RecordKind.encounter, encounter_id)  # NotFound before anything about keys
+        store.get_head(self.db.connection(), RecordKind.encounter, encounter_id)  # NotFound before anything else
+        return self.queue(encounter_id, who.username, who)
+
+    def queue(self, encounter_id: str, by: str, who: Principal | None = None) -> OutboxEntry:
+        """Read the encounter once and queue it with the report and the wounds' healing made from that reading:
+        the consultant reads the same report the clinic prints (who None: the gateway itself, the CLI)."""
         self.sync.keys()  # a clinic not linked to a center says so before a report is made
-        # The consultant reads the same report the clinic prints, and the same healing per wound.
-        report = self.reports.make(who, encounter_id)
-        patient_id = msgspec.convert(encounter.data, Encounter).patient_id
-        wounds = store.list_heads(conn, RecordKind.wound, parent_id=patient_id, limit=None)
-        healing = patient_healing(self.db, self.config, patient_id, wounds)
-        extra = (PartData("report.pdf", report.pdf), PartData("healing.json", msgspec.json.encode(healing)))
-        return self.sync.queue(encounter_id, who.username, extra)
+
+        def made_from(snapshot: EncounterSnapshot) -> tuple[PartData, ...]:
+            report = self.reports.make_from(who, snapshot)
+            healing = PatientHealing(patient_id=snapshot.patient.value.id, wounds=snapshot.healing)
+            return (PartData("report.pdf", report.pdf), PartData("healing.json", msgspec.json.encode(healing)))
+
+        return self.sync.queue(lambda: self.reports.current(encounter_id, by), by, made_from)
 
     def transfers(self, who: Principal, encounter_id: str) -> list[OutboxEntry]:
         require_read(who, RecordKind.encounter)

@@ -9,9 +9,9 @@ wound is created and listed under its patient, and its healing is read from its 
 from __future__ import annotations
 
 from base.accounts.permissions import Principal, require_read, require_write
+from gateway.jobs.healing import patient_healing, wound_healing
 from gateway.records.service import RecordService, WriteOutcome
 from gateway.records.validation import bad_field
-from gateway.wounds.healing import patient_healing, wound_healing
 from schemas.records import Record, RecordKind
 from schemas.wound import Wound
 from schemas.wound_healing import PatientHealing, WoundHealing
@@ -43,10 +43,12 @@ class WoundService:
         """The wound's track from its own analyses, and its measured share of the body beside the chart."""
         require_read(principal, RecordKind.burn_analysis)
         wound = self.records.get(principal, KIND, wound_id)
-        return wound_healing(self.records.db, self.records.config, wound)
+        with self.records.db.read() as conn:
+            return wound_healing(conn, self.records.config, wound)
 
     def patient_healing(self, principal: Principal, patient_id: str) -> PatientHealing:
         """One section per wound of the patient (and one for analyses of no wound, if any)."""
         require_read(principal, RecordKind.burn_analysis)
         wounds = self.of_patient(principal, patient_id)
-        return patient_healing(self.records.db, self.records.config, patient_id, wounds)
+        with self.records.db.read() as conn:
+            return patient_healing(conn, self.records.config, patient_id, wounds)

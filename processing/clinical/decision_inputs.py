@@ -1,36 +1,23 @@
-"""What the decision-support rules read: the encounter's record parts, each with the version it came from."""
+"""What the decision-support rules read: the encounter's record parts, each with the version it came from, taken
+from the one encounter snapshot (schemas/encounter_snapshot.py)."""
 
 from __future__ import annotations
 
 import datetime as dt
 from dataclasses import dataclass, field
-from typing import Generic, TypeVar
 
 from schemas.burn_chart import BurnChart
 from schemas.clinical_results import Assessment, InputRef
 from schemas.decision_support import InputUsed
+from schemas.encounter_snapshot import EncounterSnapshot, Versioned
 from schemas.jobs import BurnAnalysis
 from schemas.longitudinal import TrackResult
 from schemas.patient import Encounter, Patient
 from schemas.record_parts import Intake, Mechanism, PrimarySurvey, Resuscitation, SecondarySurvey
 
-T = TypeVar("T")
-
 HOURS_PER_DAY = 24.0
 ADULT_FROM_YEARS = 18.0
 """Adult doses and targets apply from 18 years in the rules that draw the line there (pain, electrical urine)."""
-
-
-@dataclass(frozen=True)
-class Versioned(Generic[T]):
-    """A record part and the version of it that was read."""
-
-    value: T
-    ref: InputRef
-
-    def used(self, name: str, value: object) -> InputUsed:
-        """One fact read from this part, as a recommendation lists it."""
-        return InputUsed(name=name, value=_shown(value), kind=self.ref.kind, id=self.ref.id, version=self.ref.version)
 
 
 @dataclass(frozen=True)
@@ -103,15 +90,41 @@ class DecisionInputs:
         return weight, self.patient.used("weight", f"{weight:g} kg" + (f" ({how.value})" if how else ""))
 
 
-def _shown(value: object) -> str:
-    if isinstance(value, bool):
-        return "yes" if value else "no"
-    if isinstance(value, float):
-        return f"{value:g}"
-    if isinstance(value, dt.datetime):
-        return value.isoformat(timespec="minutes")
-    if isinstance(value, dt.date):
-        return value.isoformat()
-    if value is None:
-        return "not recorded"
-    return str(getattr(value, "value", value))
+NO_WOUND_TRACK = "burn"
+"""How the recommendations name the track of analyses made before the patient's wounds were recorded."""
+
+
+def decision_inputs(snapshot: EncounterSnapshot) -> DecisionInputs:
+    """What the rules read, from the encounter's snapshot, judged at the time it was read."""
+    assessment = snapshot.assessment
+    refs = {visit.analysis.value.job_id: visit.analysis.ref for visit in snapshot.analyses}
+    tracks = [
+        WoundTrack(
+            label=healing.label if healing.wound_id is not None else NO_WOUND_TRACK,
+            track=healing.track,
+            refs=[refs[job] for job in (_job_of(s.analysis) for s in healing.track.sessions) if job in refs],
+            wound_id=healing.wound_id,
+        )
+        for healing in snapshot.healing
+        if healing.track is not None
+    ]
+    return DecisionInputs(
+        patient=snapshot.patient,
+        encounter=snapshot.encounter,
+        as_of=snapshot.made_at,
+        age_years=assessment.value.age_years if assessment else None,
+        intake=snapshot.intake,
+        primary=snapshot.primary,
+        secondary=snapshot.secondary,
+        mechanism=snapshot.mechanism,
+        chart=snapshot.chart,
+        resuscitation=snapshot.resuscitation,
+        assessment=assessment,
+        analyses=[visit.analysis for visit in snapshot.encounter_analyses],
+        tracks=tracks,
+    )
+
+
+def _job_of(analysis_url: str) -> str:
+    """The job id at the end of a track session's analysis address (/api/v1/analyses/{id})."""
+    return analysis_url.rstrip("/").rsplit("/", 1)[-1]

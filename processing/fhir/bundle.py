@@ -14,8 +14,8 @@ from processing.fhir.codes import concept
 from processing.fhir.record import iso, ref, resource_id
 from processing.fhir.wound import Attached
 from processing.fhir.wound_condition import wound_conditions
-from processing.snapshot import EncounterSnapshot
 from schemas.analysis import ModelSummary
+from schemas.encounter_snapshot import EncounterSnapshot
 from schemas.errors import BurnedgeError
 
 FHIR_JSON = "application/fhir+json"

@@ -8,11 +8,11 @@ written, with no code or drug class looked up. Nothing is exported for what the 
 
 from __future__ import annotations
 
-from processing.clinical.decision_inputs import Versioned
 from processing.fhir import codes
 from processing.fhir.codes import concept
 from processing.fhir.record import iso, resource_id, version_meta
 from processing.report.history_text import tetanus_lines, tetanus_recorded
+from schemas.encounter_snapshot import Versioned
 from schemas.patient import Encounter
 from schemas.record_parts import Intake, TetanusStatus
 

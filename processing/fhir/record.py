@@ -6,11 +6,11 @@ from __future__ import annotations
 import datetime as dt
 import uuid
 
-from processing.clinical.decision_inputs import Versioned
 from processing.fhir import codes
 from processing.fhir.codes import coding, concept
 from schemas.burn_chart import BurnChart
 from schemas.clinical_results import Assessment
+from schemas.encounter_snapshot import Versioned
 from schemas.patient import Encounter, Patient
 from schemas.transfer import Consultation
 

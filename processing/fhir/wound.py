@@ -16,8 +16,8 @@ from pathlib import Path
 from processing.fhir import codes
 from processing.fhir.codes import concept
 from processing.fhir.record import iso, quantity, ref, resource_id
-from processing.snapshot import AnalysisVisit
 from schemas.analysis import AnalysisStatus, ModelSummary
+from schemas.encounter_snapshot import AnalysisVisit
 from schemas.segmentation import MaskSource
 
 RELIEF_TEXT = (

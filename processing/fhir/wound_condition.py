@@ -5,10 +5,10 @@ subject of record), so a receiver can follow one wound across visits."""
 
 from __future__ import annotations
 
-from processing.clinical.decision_inputs import Versioned
 from processing.fhir import codes
 from processing.fhir.codes import concept
 from processing.fhir.record import iso, record_identifier, resource_id, version_meta
+from schemas.encounter_snapshot import Versioned
 from schemas.wound import Wound, WoundState
 
 _SIDE_WORDS = {"left": "left", "right": "right", "midline": "midline", "bilateral": "both sides"}

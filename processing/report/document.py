@@ -16,7 +16,7 @@ from pathlib import Path
 from processing.report import sections_advice, sections_analysis, sections_header, sections_healing, sections_record
 from processing.report.inputs import versions_digest
 from processing.report.layout import ReportPDF
-from processing.snapshot import EncounterSnapshot
+from schemas.encounter_snapshot import EncounterSnapshot
 
 
 def missing_lines(r: EncounterSnapshot) -> list[str]:

@@ -1,5 +1,5 @@
 """What is the report's own about its inputs: its layout version, and the digest of the record versions it is made
-from (the snapshot itself is processing/snapshot.py)."""
+from (the snapshot itself is schemas/encounter_snapshot.py)."""
 
 from __future__ import annotations
 

@@ -5,8 +5,8 @@ from __future__ import annotations
 from processing.report.figures import clock
 from processing.report.layout import GREY, URGENT, ReportPDF
 from processing.report.record_text import urgent_first
-from processing.snapshot import EncounterSnapshot
 from schemas.decision_support import RecommendationState
+from schemas.encounter_snapshot import EncounterSnapshot
 
 STATE_WORDS = {
     RecommendationState.pending: "PENDING — not yet confirmed by a clinician",

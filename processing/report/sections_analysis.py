@@ -11,8 +11,8 @@ import cv2
 from processing.report.figures import DIGITS, figure, hours
 from processing.report.layout import GREY, URGENT, ReportPDF
 from processing.report.surface_render import render_surface
-from processing.snapshot import AnalysisVisit, EncounterSnapshot
 from schemas.analysis import DISCLAIMER, AnalysisStatus, ConfidenceRecord
+from schemas.encounter_snapshot import AnalysisVisit, EncounterSnapshot
 from schemas.errors import InvalidInput
 
 log = logging.getLogger(__name__)

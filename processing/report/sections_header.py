@@ -8,8 +8,8 @@ from processing.report.figures import clock, figure
 from processing.report.history_text import allergy_lines, history_facts, medication_lines, tetanus_lines
 from processing.report.layout import GREY, NOT_RECORDED, URGENT, ReportPDF
 from processing.report.record_text import words
-from processing.snapshot import EncounterSnapshot
 from schemas.clinical_results import FluidPhase
+from schemas.encounter_snapshot import EncounterSnapshot
 
 
 def header(pdf: ReportPDF, r: EncounterSnapshot, missing: list[str]) -> None:

@@ -6,7 +6,7 @@ from processing.report.figures import figure
 from processing.report.healing_series import healing_series
 from processing.report.layout import GREY, URGENT, ReportPDF
 from processing.report.plots import line_plot
-from processing.snapshot import EncounterSnapshot
+from schemas.encounter_snapshot import EncounterSnapshot
 from schemas.wound_healing import SHARE_SOURCES, BodyShare, WoundHealing
 
 

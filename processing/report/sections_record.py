@@ -6,9 +6,9 @@ from processing.report.body_diagram import draw_body_chart
 from processing.report.figures import clock, figure
 from processing.report.layout import GREY, URGENT, ReportPDF
 from processing.report.record_text import mechanism_text, primary_facts, secondary_lines, words
-from processing.snapshot import EncounterSnapshot
 from schemas.burn_chart import BurnDepth
 from schemas.clinical_results import FluidPhase
+from schemas.encounter_snapshot import EncounterSnapshot
 
 DEPTH_ORDER = list(BurnDepth)
 DEPTH_LABEL = {

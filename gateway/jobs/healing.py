@@ -1,7 +1,9 @@
 """Healing per wound: each wound's track from its own analyses, and its measured share of the body beside the chart.
 
-The tracks are computed by the analysis jobs (gateway/jobs/timeline.py, one folder per wound); this module reads
-them and adds what is cheap to compute on reading: the wound's latest measured %TBSA against the burn chart.
+The tracks are computed by the analysis jobs (timeline.py, one folder per wound); this module reads them and adds
+what is cheap to compute on reading: the wound's latest measured %TBSA against the burn chart. The wound pages and
+API read it through gateway/wounds; the encounter snapshot (gateway/records/snapshot.py) reads it in its own
+transaction.
 """
 
 from __future__ import annotations
@@ -14,7 +16,6 @@ import msgspec
 from base.storage import records as store
 from gateway.jobs import timeline
 from gateway.storage import jobs
-from gateway.storage.database import Database
 from processing.clinical.wound_share import Charted, Measured, body_share
 from schemas.burn_chart import BurnChart
 from schemas.clinical_results import Assessment
@@ -28,25 +29,25 @@ from schemas.wound_healing import BodyShare, PatientHealing, WoundHealing
 NO_WOUND_LABEL = "analyses of no wound (made before the patient's wounds were recorded)"
 
 
-def wound_healing(db: Database, config: Config, record: Record) -> WoundHealing:
+def wound_healing(conn: sqlite3.Connection, config: Config, record: Record) -> WoundHealing:
     """The wound's track and share; a wound without a measured visit has neither yet."""
     wound = record.value()
-    track = timeline.read_track(db.connection(), config, wound.patient_id, wound.id)
+    track = timeline.read_track(conn, config, wound.patient_id, wound.id)
     return WoundHealing(
         wound_id=wound.id,
         label=wound.label,
         regions=list(wound.regions),
         state=wound.state.value,
         track=track,
-        share=_share(db.connection(), wound, track),
+        share=_share(conn, wound, track),
     )
 
 
-def patient_healing(db: Database, config: Config, patient_id: str, wounds: list[Record]) -> PatientHealing:
+def patient_healing(conn: sqlite3.Connection, config: Config, patient_id: str, wounds: list[Record]) -> PatientHealing:
     """One section per live wound, then one for analyses of no wound when the patient has any."""
-    sections = [wound_healing(db, config, w) for w in wounds if not w.meta.deleted]
-    if any(job.wound_id is None for job in jobs.measured(db.connection(), patient_id)):
-        track = timeline.read_track(db.connection(), config, patient_id, None)
+    sections = [wound_healing(conn, config, w) for w in wounds if not w.meta.deleted]
+    if any(job.wound_id is None for job in jobs.measured(conn, patient_id)):
+        track = timeline.read_track(conn, config, patient_id, None)
         sections.append(WoundHealing(wound_id=None, label=NO_WOUND_LABEL, track=track))
     return PatientHealing(patient_id=patient_id, wounds=sections)
 
