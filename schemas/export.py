@@ -17,7 +17,9 @@ import msgspec
 import schemas
 from schemas.base import Frozen, Message
 
-_SKIP_MODULES = {"schemas.export", "schemas.config"}
+_SKIP_MODULES = {"schemas.export", "schemas.config", "schemas.encounter_snapshot"}
+"""Not messages: the exporter, the configuration (docs/configuration.md) and the encounter snapshot, an in-memory
+reading that never travels as it is."""
 
 
 def public_messages() -> list[type[msgspec.Struct]]:

@@ -18,7 +18,7 @@ import pytest
 from litestar.testing import TestClient
 
 from center.app import create_central_app
-from gateway.transfers import service as transfers
+from gateway.records import snapshot as encounter_reading
 from harness.bodies import encounter_body, now, patient_body, wound_body
 from harness.sites import noise_photo
 from schemas.transfer import CaseSummary, CaseWound
@@ -38,8 +38,8 @@ def _with_a_measured_arm(real):
     """healing.json as the clinic sends it once the arm has a measured visit: the track behind it needs a 3D
     reconstruction, so its share is given here (the arm is not on the chart: the clinic's check flags it)."""
 
-    def patient_healing(db, config, patient_id, wounds):
-        healing = real(db, config, patient_id, wounds)
+    def patient_healing(conn, config, patient_id, wounds):
+        healing = real(conn, config, patient_id, wounds)
         share = BodyShare(
             measured_percent=0.1,
             measured_area_cm2=18.4,
@@ -82,7 +82,7 @@ def _record_case(pair: Pair, folder: Path) -> None:
     photo = api.upload(noise_photo(folder / "photo.jpg", 1, size=(640, 480)), encounter_id)
     store_analysis(pair, encounter_id, [photo["asset"]["id"]], wound_id=arm["meta"]["id"])
     with pytest.MonkeyPatch.context() as patch:
-        patch.setattr(transfers, "patient_healing", _with_a_measured_arm(transfers.patient_healing))
+        patch.setattr(encounter_reading, "patient_healing", _with_a_measured_arm(encounter_reading.patient_healing))
         pair.send(encounter_id)
 
 
