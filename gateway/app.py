@@ -21,6 +21,7 @@ from base.web.pages.rendering import NAV_KEY, SITE_NAME_KEY, template_config
 from gateway.analyses.controller import AnalysisController
 from gateway.analyses.model_controller import ModelController
 from gateway.capture.asset_controller import AssetController
+from gateway.capture.settings_controller import CaptureSettingsController
 from gateway.capture.upload_controller import UploadController
 from gateway.dependencies import Services, provide_services
 from gateway.documents.fhir_controller import FhirController
@@ -64,6 +65,7 @@ def create_app(config: Config, *, start_workers: bool = False) -> Litestar:
             SyncController,
             UploadController,
             AssetController,
+            CaptureSettingsController,
             AnalysisController,
             ModelController,
             TransferController,

@@ -5,6 +5,7 @@ from __future__ import annotations
 import enum
 
 from schemas.base import Frozen
+from schemas.config import QualityGateConfig, ReadinessConfig
 
 TUS_VERSION = "1.0.0"
 """The tus protocol version the gateway speaks."""
@@ -205,3 +206,25 @@ class CaptureReadiness(Frozen):
     """Largest angle between viewing directions, from the marker poses; None with fewer than two marker views."""
     missing: list[str]
     """What to do, in sentences, when not ready."""
+
+
+class MarkerSpec(Frozen):
+    """The printed scale marker the gateway measures with."""
+
+    dictionary: str
+    """ArUco dictionary (an OpenCV name, e.g. DICT_4X4_50)."""
+    side_mm: float
+    """Printed side of one marker, outer black edge to outer black edge."""
+    sheet: str
+    """Where to print it: the sheet of strips with a 10 cm check line."""
+
+
+class CaptureSettings(Frozen):
+    """What a phone checks before a picture leaves the bedside: the gateway's own gate thresholds, readiness rules and
+    marker, served so the app and the gateway judge by one source (GET /api/v1/capture/settings)."""
+
+    quality: QualityGateConfig
+    readiness: ReadinessConfig
+    marker: MarkerSpec
+    max_upload_bytes: int
+    """Largest photo or video the gateway takes in one upload."""

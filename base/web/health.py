@@ -1,4 +1,5 @@
-"""Liveness and readiness: the only endpoint without authentication besides the ways in."""
+"""Liveness and readiness: without authentication, as are the ways in and what a phone needs before it captures
+(gateway/capture/settings_controller.py); none of them holds patient data."""
 
 from __future__ import annotations
 
