@@ -28,6 +28,7 @@ from gateway.documents.fhir_controller import FhirController
 from gateway.documents.report_controller import ReportController
 from gateway.jobs.supervisor import Workers
 from gateway.pages import NAV, SITE_NAME
+from gateway.phones.app_routes import CompanionAppController
 from gateway.phones.controller import SyncController
 from gateway.reactions import ANALYSIS_STORED
 from gateway.records.controller import EncounterController, PatientController
@@ -63,6 +64,7 @@ def create_app(config: Config, *, start_workers: bool = False) -> Litestar:
             ReportController,
             FhirController,
             SyncController,
+            CompanionAppController,
             UploadController,
             AssetController,
             CaptureSettingsController,

@@ -20,6 +20,7 @@ from gateway.storage import uploads as upload_rows
 from gateway.storage.database import Database
 from gateway.wounds.choice import wound_of_patient
 from processing.capture.media import check_photo, check_video, sniff
+from processing.capture.phone_time import with_stated_time
 from processing.capture.quality import gate_bytes
 from processing.capture.readiness import View
 from processing.capture.readiness import assess as assess_readiness
@@ -45,12 +46,14 @@ class AssetService:
         upload_id: str | None = None,
         expected: str | None = None,
         wound_id: str | None = None,
+        stated_time: str | None = None,
     ) -> Asset:
         """Check a finished upload and keep it; the same bytes for the same encounter give the same asset.
 
         Everything is checked before the file moves into the store; the asset row and the
         upload's completion are written in one transaction. `expected` is an optional
-        whole-file checksum from the upload's metadata ("sha256 <hex or base64>").
+        whole-file checksum from the upload's metadata ("sha256 <hex or base64>"); `stated_time` the capture time
+        the phone stated there (ISO 8601 with offset), kept when the file carries none.
         """
         size = part.stat().st_size
         if size == 0:
@@ -74,6 +77,7 @@ class AssetService:
             metadata, kind = check_photo(data, media_type, self.config.quality.max_pixels), AssetKind.photo
             verdict = gate_bytes(data, self.config.quality, name=filename)
             sha = hashlib.sha256(data).hexdigest()
+        metadata = with_stated_time(metadata, stated_time)
         _check_whole_file(expected, sha)
         new_blob = not self.store.blob(sha).exists()
         final = self.store.promote(part, sha)

@@ -27,6 +27,7 @@ from gateway.records.validation import require_live_encounter
 from gateway.storage import uploads as upload_rows
 from gateway.storage.database import Database
 from gateway.wounds.choice import wound_of_patient
+from processing.capture.phone_time import exif_form
 from schemas.base import iso, utcnow
 from schemas.capture import Asset, StoredUpload, UploadPhase
 from schemas.config import Config
@@ -101,6 +102,8 @@ class UploadService:
         if not encounter_id:
             raise InvalidInput("say which encounter the file belongs to: Upload-Metadata encounter_id")
         filename = check_filename(next((metadata[k] for k in FILENAME_KEYS if metadata.get(k)), ""))
+        if metadata.get("captured_at"):
+            exif_form(metadata["captured_at"])  # refused now, not after the whole file has come
         upload_id, now = uuid7(), utcnow()
         with self.db.write() as conn:
             encounter = require_live_encounter(conn, encounter_id)
@@ -180,6 +183,7 @@ class UploadService:
                 upload_id=upload_id,
                 expected=row.metadata.get("checksum"),
                 wound_id=row.metadata.get("wound_id") or None,
+                stated_time=row.metadata.get("captured_at") or None,
             )
         except StorageError:
             raise  # the database was busy: the file stays, and housekeeping completes it later

@@ -1,0 +1,182 @@
+"""The phone companion app (/app/) in a real Chromium standing in for a phone (phone viewport, touch, a fake camera
+fed from a video file) against a real gateway process on loopback: paired, signed in, then offline at the bedside a
+patient, an encounter and a wound are made and photos taken with the camera; the page is closed and opened again
+offline from the service worker; back in reach, every photo reaches the gateway byte for byte and its verdict comes
+back to the phone."""
+
+from __future__ import annotations
+
+import hashlib
+import time
+from pathlib import Path
+
+import httpx
+import pytest
+
+from harness.browser import CHROMIUM, CHROMIUM_ARGS, PHONE, browser_missing, shot
+from harness.processes import PASSWORD, GatewayProcess, free_port
+from harness.sites import cli
+
+pytestmark = pytest.mark.skipif(bool(browser_missing()), reason=browser_missing() or "browser present")
+PHOTOS = 3
+
+
+def fake_camera(folder: Path) -> Path:
+    """An MJPEG file of a rendered burn phantom seen from around it, for Chromium's fake camera."""
+    from tests.phantom_helpers import render_small_patch
+
+    phantom = render_small_patch(folder / "phantom")
+    frames = sorted((phantom / "images").glob("*.jpg"))
+    video = folder / "orbit.mjpeg"
+    video.write_bytes(b"".join(f.read_bytes() for f in frames for _ in range(15)))  # half a second per view
+    return video
+
+
+@pytest.fixture(scope="module")
+def gateway(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("phone")
+    process = GatewayProcess(folder / "gateway.sqlite3", free_port())
+    for name, role in (("admin", "admin"), ("nurse", "nurse")):
+        cli(
+            "--db",
+            str(process.db),
+            "users",
+            "add",
+            "--username",
+            name,
+            "--role",
+            role,
+            "--password-stdin",
+            stdin=PASSWORD,
+        )
+    process.start()
+    yield process, folder
+    process.stop()
+
+
+@pytest.fixture(scope="module")
+def phone_browser(gateway):
+    """Chromium with a fake rear camera playing the phantom's orbit, the camera permission granted."""
+    from playwright.sync_api import sync_playwright
+
+    camera = fake_camera(gateway[1])
+    with sync_playwright() as playwright:
+        args = [
+            *CHROMIUM_ARGS,
+            "--use-fake-ui-for-media-stream",
+            "--use-fake-device-for-media-stream",
+            f"--use-file-for-fake-video-capture={camera}",
+        ]
+        browser = playwright.chromium.launch(executable_path=str(CHROMIUM), headless=True, args=args)
+        yield browser
+        browser.close()
+
+
+def poll(page, script: str, timeout_s: float = 30.0):
+    deadline = time.monotonic() + timeout_s
+    while not (value := page.evaluate(script)):
+        if time.monotonic() > deadline:
+            raise AssertionError(f"timed out after {timeout_s:g} s waiting for {script}")
+        page.wait_for_timeout(250)
+    return value
+
+
+PHONE_PHOTOS = """async () => {
+  const db = await new Promise((ok, fail) => { const r = indexedDB.open("burnedge-app"); r.onsuccess = () => ok(r.result); r.onerror = fail; });
+  const all = await new Promise((ok) => { const r = db.transaction("photos").objectStore("photos").getAll(); r.onsuccess = () => ok(r.result); });
+  db.close();
+  return all.map((p) => ({ id: p.id, sha256: p.sha256, state: p.state, asset: p.asset, taken_at: p.taken_at }));
+}"""
+
+
+def test_a_nurse_pairs_captures_offline_and_nothing_is_lost(gateway, phone_browser):
+    process, _ = gateway
+    browser = phone_browser
+    admin = httpx.post(f"{process.url}/api/v1/auth/login", json={"username": "admin", "password": PASSWORD}).json()
+    code = httpx.post(
+        f"{process.url}/api/v1/admin/pairing-codes",
+        json={"device_name": "ward phone"},
+        headers={"Authorization": f"Bearer {admin['access_token']}"},
+    ).json()["code"]
+    context = browser.new_context(
+        viewport={"width": PHONE[0], "height": PHONE[1]}, has_touch=True, is_mobile=True, permissions=["camera"]
+    )
+    page = context.new_page()
+    try:
+        # 1. Pair from the QR code's address, then sign in once for the shift.
+        page.goto(f"{process.url}/app/#pair={code}")
+        page.get_by_role("button", name="Pair").click()
+        page.get_by_label("User name").fill("nurse")
+        page.get_by_label("Password").fill(PASSWORD)
+        page.get_by_role("button", name="Sign in").click()
+        page.get_by_role("heading", name="Patients").wait_for()
+        poll(page, "navigator.serviceWorker.controller !== null || navigator.serviceWorker.ready.then(() => true)")
+        shot(page, "phone-patients")
+
+        # 2.-3. Offline: the patient, the encounter (time of injury, mechanism) and the wound.
+        context.set_offline(True)
+        page.get_by_label("Given name").fill("Ana")
+        page.get_by_label("Family name").fill("Offline")
+        page.get_by_role("button", name="Add patient").click()
+        page.get_by_role("heading", name="Ana Offline").wait_for()
+        page.get_by_label("Time of injury").fill("2026-12-06T06:30")
+        page.get_by_label("Mechanism").select_option("scald")
+        page.get_by_role("button", name="Start encounter").click()
+        page.get_by_role("heading", name="Photograph").wait_for()
+        encounter_id = page.url.rsplit("/", 1)[-1]
+        page.goto(page.url.replace(f"#/encounter/{encounter_id}", ""))  # back to the patient through the list
+        page.get_by_role("link", name="Ana Offline").click()
+        page.get_by_label("Name").fill("left forearm")
+        page.get_by_label("Regions").select_option(["lower_arm_left_anterior"])
+        page.get_by_role("button", name="Add wound").click()
+        page.get_by_text("left forearm").first.wait_for()
+        shot(page, "phone-patient")
+
+        # 4. The camera: stills from the live view go to the phone's queue at once.
+        page.goto(f"{process.url}/app/#/encounter/{encounter_id}")
+        page.get_by_role("link", name="Photograph left forearm").click()
+        shutter = page.get_by_role("button", name="Take photo")
+        shutter.wait_for()
+        poll(page, "!document.getElementById('shutter').disabled", 30)
+        for n in range(1, PHOTOS + 1):
+            shutter.click()
+            page.get_by_text(f"{n} photos of left forearm on this phone").wait_for()
+        shot(page, "phone-capture")
+        taken = page.evaluate(PHONE_PHOTOS)
+        assert len(taken) == PHOTOS and all(p["state"] == "queued" for p in taken)
+
+        # 5. Closed, and opened again with no connection: the service worker serves the app, the queue is there.
+        page.close()
+        page = context.new_page()
+        page.goto(f"{process.url}/app/")
+        page.get_by_role("heading", name="Patients").wait_for()
+        assert "offline" in page.locator("#link-status").inner_text()
+        assert f"{PHOTOS} photos waiting" in page.locator("#queue-status").inner_text()
+
+        # 6. Back in reach: the records go first, then each photo, confirmed by its SHA-256, and its verdict.
+        context.set_offline(False)
+        page.evaluate("window.dispatchEvent(new Event('online'))")
+        stored = poll(
+            page,
+            f"({PHONE_PHOTOS})().then((ps) => ps.length === {PHOTOS} && ps.every((p) => p.state === 'stored') && ps)",
+            120,
+        )
+        page.goto(f"{process.url}/app/#/encounter/{encounter_id}")
+        page.locator("[data-state=stored]").first.wait_for()
+        assert page.locator("[data-state=stored]").count() == PHOTOS
+        assert page.locator(".verdict").count() == PHOTOS  # the gateway's verdict on each, now on the phone
+        shot(page, "phone-encounter")
+    finally:
+        context.close()
+
+    nurse = httpx.post(f"{process.url}/api/v1/auth/login", json={"username": "nurse", "password": PASSWORD}).json()
+    headers = {"Authorization": f"Bearer {nurse['access_token']}"}
+    for photo in stored:
+        asset = httpx.get(f"{process.url}/api/v1/assets/{photo['asset']['id']}", headers=headers).json()
+        body = httpx.get(f"{process.url}/api/v1/assets/{asset['id']}/file", headers=headers).content
+        assert hashlib.sha256(body).hexdigest() == photo["sha256"] == asset["sha256"]
+        assert asset["encounter_id"] == encounter_id and asset["wound_id"]
+        assert asset["metadata"]["captured_offset"]  # the phone's stated capture time, kept as a camera's
+        assert photo["asset"]["verdict"]["file"]
+    record = httpx.get(f"{process.url}/api/v1/encounters/{encounter_id}/mechanism", headers=headers).json()
+    assert record["data"]["type"] == "scald"
