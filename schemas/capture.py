@@ -217,6 +217,13 @@ class MarkerSpec(Frozen):
     """Printed side of one marker, outer black edge to outer black edge."""
     sheet: str
     """Where to print it: the sheet of strips with a 10 cm check line."""
+    bits: int
+    """Bits per marker (16 for a 4x4 dictionary)."""
+    max_correction_bits: int
+    """Bit errors the dictionary can correct."""
+    codes: list[str]
+    """Each marker id's bits, read row by row from the top left (black = 1), as hexadecimal: a phone's detector
+    reads the same dictionary as the gateway's."""
 
 
 class CaptureSettings(Frozen):
@@ -228,3 +235,7 @@ class CaptureSettings(Frozen):
     marker: MarkerSpec
     max_upload_bytes: int
     """Largest photo or video the gateway takes in one upload."""
+    rejecting: list[QualityReason]
+    """Reasons that make a picture unusable for reconstruction; the others only advise."""
+    guidance: dict[QualityReason, str]
+    """What to tell the person holding the phone, for each reason."""

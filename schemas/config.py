@@ -181,6 +181,8 @@ class ReadinessConfig(Message):
 
     min_views: Annotated[int, msgspec.Meta(ge=1)] = 6
     """Accepted photos or frames needed (the seed's minimum)."""
+    recommended_views: Annotated[int, msgspec.Meta(ge=2, le=36)] = 8
+    """Views the phone's capture guide asks for, round the burn (its ring has one angle fewer, plus straight on)."""
     min_marker_views: Annotated[int, msgspec.Meta(ge=0)] = 2
     """Accepted views that must show the scale marker."""
     min_spread_deg: Annotated[float, msgspec.Meta(ge=0, le=180)] = 20.0

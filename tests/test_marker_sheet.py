@@ -93,4 +93,13 @@ def test_the_sheet_and_the_settings_are_served_without_signing_in(client, config
     body = settings.json()
     assert body["quality"]["min_local_sharpness"] == config.quality.min_local_sharpness
     assert body["readiness"]["min_views"] == config.readiness.min_views
-    assert body["marker"] == {"dictionary": "DICT_4X4_50", "side_mm": 20.0, "sheet": "/marker-sheet.pdf"}
+    marker = body["marker"]
+    assert (marker["dictionary"], marker["side_mm"], marker["sheet"]) == ("DICT_4X4_50", 20.0, "/marker-sheet.pdf")
+    # The phone's detector reads the gateway's own dictionary: each code is the marker's bits (white = 1, as
+    # OpenCV draws them), row by row.
+    aruco = cv2.aruco.getPredefinedDictionary(cv2.aruco.DICT_4X4_50)
+    assert (marker["bits"], len(marker["codes"])) == (16, 50)
+    for marker_id in (0, 7, 49):
+        drawn = cv2.aruco.generateImageMarker(aruco, marker_id, 6, borderBits=1)[1:5, 1:5] > 127
+        assert format(int(marker["codes"][marker_id], 16), "016b") == "".join("1" if b else "0" for b in drawn.ravel())
+    assert body["guidance"]["blurry"].startswith("Hold the phone still") and "blurry" in body["rejecting"]

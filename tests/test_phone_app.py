@@ -85,7 +85,8 @@ PHONE_PHOTOS = """async () => {
   const db = await new Promise((ok, fail) => { const r = indexedDB.open("burnedge-app"); r.onsuccess = () => ok(r.result); r.onerror = fail; });
   const all = await new Promise((ok) => { const r = db.transaction("photos").objectStore("photos").getAll(); r.onsuccess = () => ok(r.result); });
   db.close();
-  return all.map((p) => ({ id: p.id, sha256: p.sha256, state: p.state, asset: p.asset, taken_at: p.taken_at }));
+  return all.map((p) => ({ id: p.id, sha256: p.sha256, state: p.state, asset: p.asset, taken_at: p.taken_at,
+    device_verdict: p.device_verdict, disagrees: p.disagrees }));
 }"""
 
 
@@ -138,12 +139,19 @@ def test_a_nurse_pairs_captures_offline_and_nothing_is_lost(gateway, phone_brows
         shutter = page.get_by_role("button", name="Take photo")
         shutter.wait_for()
         poll(page, "!document.getElementById('shutter').disabled", 30)
+        # The gateway's checks run on the preview: the printed marker in the phantom's orbit is found.
+        poll(page, "document.getElementById('check').textContent.includes('marker in view')", 60)
         for n in range(1, PHOTOS + 1):
+            poll(page, "document.getElementById('check').textContent.includes('marker in view')", 30)
             shutter.click()
+            if page.locator("#warn").is_visible():
+                page.get_by_role("button", name="Take it anyway").click()
             page.get_by_text(f"{n} photos of left forearm on this phone").wait_for()
         shot(page, "phone-capture")
         taken = page.evaluate(PHONE_PHOTOS)
         assert len(taken) == PHOTOS and all(p["state"] == "queued" for p in taken)
+        assert all(p["device_verdict"]["figures"]["markers"] for p in taken)  # judged on the phone before it left
+        assert page.locator(".ring .arc-done, .ring circle.arc-done").count() >= 1  # the ring fills
 
         # 5. Closed, and opened again with no connection: the service worker serves the app, the queue is there.
         page.close()

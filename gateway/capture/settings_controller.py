@@ -6,13 +6,15 @@ from __future__ import annotations
 import functools
 from typing import Annotated
 
+import cv2
 from litestar import Controller, Response, get
 from litestar.params import Parameter
 
 from gateway.dependencies import ServicesDep
 from processing.capture import marker_sheet
 from processing.capture.marker_sheet import Paper
-from schemas.capture import CaptureSettings, MarkerSpec
+from processing.capture.quality import GUIDANCE
+from schemas.capture import REJECTING, CaptureSettings, MarkerSpec
 
 SHEET_PATH = "/marker-sheet.pdf"
 
@@ -20,6 +22,24 @@ SHEET_PATH = "/marker-sheet.pdf"
 @functools.lru_cache(maxsize=8)
 def _sheet(dictionary: str, side_mm: float, paper: Paper) -> bytes:
     return marker_sheet.render(dictionary, side_mm, paper)
+
+
+@functools.lru_cache(maxsize=4)
+def _marker(dictionary: str, side_mm: float) -> MarkerSpec:
+    aruco = marker_sheet.aruco_dictionary(dictionary)
+    size = aruco.markerSize
+    codes = []
+    for marker_id in range(aruco.bytesList.shape[0]):
+        bits = cv2.aruco.Dictionary.getBitsFromByteList(aruco.bytesList[marker_id : marker_id + 1], size)
+        codes.append(format(int("".join(str(int(b)) for b in bits.ravel()), 2), "x"))
+    return MarkerSpec(
+        dictionary=dictionary,
+        side_mm=side_mm,
+        sheet=SHEET_PATH,
+        bits=size * size,
+        max_correction_bits=int(aruco.maxCorrectionBits),
+        codes=codes,
+    )
 
 
 class CaptureSettingsController(Controller):
@@ -38,12 +58,10 @@ class CaptureSettingsController(Controller):
         return CaptureSettings(
             quality=config.quality,
             readiness=config.readiness,
-            marker=MarkerSpec(
-                dictionary=config.reconstruction.marker_dictionary,
-                side_mm=config.reconstruction.marker_side_mm,
-                sheet=SHEET_PATH,
-            ),
+            marker=_marker(config.reconstruction.marker_dictionary, config.reconstruction.marker_side_mm),
             max_upload_bytes=config.uploads.max_upload_bytes,
+            rejecting=sorted(REJECTING),
+            guidance=GUIDANCE,
         )
 
     @get(

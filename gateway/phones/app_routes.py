@@ -27,7 +27,10 @@ from schemas.wound import WoundSide
 
 APP_DIR = Path(__file__).with_name("app")
 APP_PATH = "/app"
-VENDORED = {"/static/vendor/tus/tus.min.js": VENDOR_DIR / "tus" / "tus.min.js"}
+VENDORED = {
+    f"/static/vendor/{name}": VENDOR_DIR / name
+    for name in ("tus/tus.min.js", "js-aruco2/cv.js", "js-aruco2/aruco.js", "js-aruco2/svd.js", "js-aruco2/posit1.js")
+}
 """Files of the pages' vendored libraries the app uses, kept by its service worker too."""
 TYPES = {".js": "text/javascript", ".webmanifest": "application/manifest+json", ".css": "text/css"}
 

@@ -43,7 +43,8 @@ class SheetLayout:
     """The marker ids of each strip, in print order."""
 
 
-def _dictionary(name: str):
+def aruco_dictionary(name: str) -> cv2.aruco.Dictionary:
+    """The OpenCV ArUco dictionary of that name; InvalidInput naming it when there is none."""
     code = getattr(cv2.aruco, name, None)
     if not isinstance(code, int) or not name.startswith("DICT_"):
         raise InvalidInput(f"unknown ArUco dictionary {name!r}: use an OpenCV name such as DICT_4X4_50")
@@ -52,7 +53,7 @@ def _dictionary(name: str):
 
 def marker_cells(dictionary: str, marker_id: int) -> np.ndarray:
     """The marker as a square of cells, its black border included: True where the print is black."""
-    aruco = _dictionary(dictionary)
+    aruco = aruco_dictionary(dictionary)
     cells = aruco.markerSize + 2
     image = cv2.aruco.generateImageMarker(aruco, marker_id, cells, borderBits=1)
     return image < 128
@@ -62,7 +63,7 @@ def layout(dictionary: str, side_mm: float, paper: Paper) -> SheetLayout:
     """As many strips as fit the page beside the check line and the instructions, each with its own three ids."""
     if not 5.0 <= side_mm <= 60.0:
         raise InvalidInput(f"a marker side of {side_mm:g} mm cannot be printed usefully (5 to 60 mm)")
-    count = _dictionary(dictionary).bytesList.shape[0]
+    count = aruco_dictionary(dictionary).bytesList.shape[0]
     width, height = PAPER_MM[paper]
     strip_w, strip_h = _strip_size(side_mm)
     columns = max(1, int((width - 2 * PAGE_MARGIN_MM + STRIP_SPACING_MM) // (strip_w + STRIP_SPACING_MM)))

@@ -47,6 +47,7 @@ async function round() {
   let inReach = false;
   try {
     inReach = await reachable();
+    if (inReach) await refreshSettings();
     if (inReach && (await session())) {
       await push();
       await pull();
@@ -58,6 +59,16 @@ async function round() {
     running = false;
     await status(inReach);
     if (inReach && document.querySelector("[data-state]")) refreshScreen();
+  }
+}
+
+// The gateway's gate thresholds, readiness rules and marker, kept for the checks offline.
+async function refreshSettings() {
+  try {
+    const response = await fetch("/api/v1/capture/settings", { cache: "no-store" });
+    if (response.ok) await kv.set("capture-settings", await response.json());
+  } catch {
+    // kept from the last time; the capture screen says when there are none yet
   }
 }
 

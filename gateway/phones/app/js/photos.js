@@ -16,7 +16,7 @@ export async function room(bytes = 0) {
   return { ok: free > bytes + HEADROOM, low: free < 20 * 4 * 1024 * 1024 + HEADROOM, free };
 }
 
-export async function keepPhoto(blob, { encounterId, woundId, takenAt, source, deviceVerdict }) {
+export async function keepPhoto(blob, { encounterId, woundId, takenAt, source, deviceVerdict, sector = null }) {
   const space = await room(blob.size);
   if (!space.ok) {
     throw new Error(
@@ -37,6 +37,7 @@ export async function keepPhoto(blob, { encounterId, woundId, takenAt, source, d
     wound_id: woundId || null,
     source,
     device_verdict: deviceVerdict || null,
+    sector,
     state: "queued",
     upload_url: null,
     sent: 0,
