@@ -16,6 +16,7 @@ from base.web.openapi import ClosedStructSchemaPlugin
 from base.web.pages.api_docs import offline_openapi_plugins
 from base.web.pages.assets import static_files
 from base.web.pages.clinic_time import CLOCK_KEY, ClinicClock
+from base.web.pages.pairing_link import APP_PATH_KEY
 from base.web.pages.protection import csrf_protection, security_headers
 from base.web.pages.rendering import NAV_KEY, SITE_NAME_KEY, template_config
 from gateway.analyses.controller import AnalysisController
@@ -28,7 +29,7 @@ from gateway.documents.fhir_controller import FhirController
 from gateway.documents.report_controller import ReportController
 from gateway.jobs.supervisor import Workers
 from gateway.pages import NAV, SITE_NAME
-from gateway.phones.app_routes import CompanionAppController
+from gateway.phones.app_routes import APP_PATH, CompanionAppController
 from gateway.phones.controller import SyncController
 from gateway.reactions import ANALYSIS_STORED
 from gateway.records.controller import EncounterController, PatientController
@@ -94,6 +95,7 @@ def create_app(config: Config, *, start_workers: bool = False) -> Litestar:
                 SITE_NAME_KEY: SITE_NAME,
                 NAV_KEY: NAV,
                 CLOCK_KEY: clock,
+                APP_PATH_KEY: f"{APP_PATH}/",
             }
         ),
         on_startup=[lambda app: _start_background(app, services, workers)],

@@ -135,6 +135,8 @@ def test_a_pairing_code_is_shown_once_and_pairs_a_phone(admin, services):
     assert r.status_code == 201 and r.headers["cache-control"] == "no-store"
     code = _CODE.search(r.text.split("Pairing code for", 1)[1]).group(0)
     assert "ward 2 phone" in r.text
+    # The same code as a link the phone's camera opens (the gateway's app, the code in the fragment), as a QR code.
+    assert f"http://testserver.local/app/#pair={code}" in r.text and 'class="segno"' in r.text
     assert code not in admin.get("/admin").text
     paired = services.accounts.pair(PairRequest(code=code), client="test")
     assert "ward 2 phone" in admin.get("/admin").text and paired.device_id in admin.get("/admin").text

@@ -17,6 +17,7 @@ from litestar.params import QueryParameter
 from litestar.response import Redirect, Template
 
 from base.web.pages.forms import FormBody, FormInvalid, field_errors, form_fields, parse_form
+from base.web.pages.pairing_link import PairingLink, pairing_link
 from base.web.pages.rendering import page
 from base.web.paths import IdPath
 from base.web.site import AuthedRequest, SiteServices, SiteServicesDep
@@ -65,6 +66,7 @@ class AdminView(msgspec.Struct, kw_only=True):
     pairing_raw: Any = None
     pairing_errors: dict[str, str] = {}
     pairing_code: PairingCode | None = None
+    pairing_link: PairingLink | None = None
     audit: AuditVerification | None = None
     done: str | None = None
 
@@ -94,6 +96,7 @@ def _admin_page(request: AuthedRequest, services: SiteServices, view: AdminView,
         ),
         pairing_error=view.pairing_errors.get(""),
         pairing_code=view.pairing_code,
+        pairing_link=view.pairing_link,
         audit=view.audit,
         done=view.done,
     )
@@ -173,7 +176,8 @@ class AdminPages(Controller):
             return _admin_page(request, services, view, 422)
         except InvalidInput as exc:
             return _admin_page(request, services, AdminView(pairing_raw=data, pairing_errors=_service_errors(exc)), 422)
-        response = _admin_page(request, services, AdminView(pairing_code=code), 201)
+        link = pairing_link(request, code.code)
+        response = _admin_page(request, services, AdminView(pairing_code=code, pairing_link=link), 201)
         response.headers["Cache-Control"] = "no-store"  # the code must not come back from a cache or history
         return response
 
