@@ -25,7 +25,9 @@ export function localIso(date = new Date()) {
   );
 }
 
+// null where the browser offers no hashing (a page on plain http at a LAN address is not a secure context).
 export async function sha256Hex(blob) {
+  if (!crypto.subtle) return null;
   const digest = await crypto.subtle.digest("SHA-256", await blob.arrayBuffer());
   return Array.from(new Uint8Array(digest), (b) => b.toString(16).padStart(2, "0")).join("");
 }

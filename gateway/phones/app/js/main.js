@@ -110,6 +110,13 @@ window.addEventListener("hashchange", route);
 window.addEventListener("online", round);
 window.addEventListener("burnedge-change", round);
 document.addEventListener("visibilitychange", () => document.visibilityState === "visible" && round());
+if (!window.isSecureContext) {
+  banner(
+    "This address is not secure (plain http on the clinic network): the in-app camera, offline use and the photo " +
+      "checks need the gateway's https address. Photos can still be taken with the phone's camera app.",
+    "warn",
+  );
+}
 serviceWorker();
 keepStorage();
 route().then(round);
