@@ -11,7 +11,7 @@ import cv2
 import numpy as np
 import pytest
 
-from processing.capture.marker_sheet import CHECK_LINE_MM, Paper, render
+from processing.report.marker_sheet import CHECK_LINE_MM, Paper, render
 from schemas.errors import InvalidInput
 
 DPI = 150

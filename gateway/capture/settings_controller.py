@@ -11,9 +11,9 @@ from litestar import Controller, Response, get
 from litestar.params import Parameter
 
 from gateway.dependencies import ServicesDep
-from processing.capture import marker_sheet
-from processing.capture.marker_sheet import Paper
 from processing.capture.quality import GUIDANCE
+from processing.report import marker_sheet
+from processing.report.marker_sheet import Paper
 from schemas.capture import REJECTING, CaptureSettings, MarkerSpec
 
 SHEET_PATH = "/marker-sheet.pdf"
@@ -70,6 +70,7 @@ class CaptureSettingsController(Controller):
         exclude_from_auth=True,
         summary="The printable scale marker sheet (PDF): strips of three markers and a 10 cm check line",
         media_type="application/pdf",
+        include_in_schema=False,  # a document for people, answered as a page (its errors too), like the pages
     )
     def sheet(
         self,
