@@ -10,7 +10,7 @@ cd "$(dirname "$0")/.."
 PYTHON=${PYTHON:-python3}
 SYSTEM_PACKAGES=(libusb-1.0-0 libgl1 libegl1 libx11-6 libudev1 libgomp1 poppler-utils)
 case "${1:-}" in
-    --test) SYSTEM_PACKAGES+=(chromium postgresql) ;;
+    --test) SYSTEM_PACKAGES+=(chromium postgresql libnss3-tools) ;;
     "") ;;
     *)
         echo "bootstrap: unknown argument $1 (the only one is --test)" >&2

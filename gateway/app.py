@@ -8,6 +8,7 @@ from litestar.di import Provide
 from litestar.openapi import OpenAPIConfig
 
 from base import __version__
+from base.folders import keys_dir
 from base.web.account_controllers import AdminController, AuthController
 from base.web.authentication import session_auth
 from base.web.errors import EXCEPTION_HANDLERS
@@ -16,7 +17,7 @@ from base.web.openapi import ClosedStructSchemaPlugin
 from base.web.pages.api_docs import offline_openapi_plugins
 from base.web.pages.assets import static_files
 from base.web.pages.clinic_time import CLOCK_KEY, ClinicClock
-from base.web.pages.pairing_link import APP_PATH_KEY
+from base.web.pages.pairing_link import APP_PATH_KEY, FINGERPRINT_KEY
 from base.web.pages.protection import csrf_protection, security_headers
 from base.web.pages.rendering import NAV_KEY, SITE_NAME_KEY, template_config
 from gateway.analyses.controller import AnalysisController
@@ -27,6 +28,7 @@ from gateway.capture.upload_controller import UploadController
 from gateway.dependencies import Services, provide_services
 from gateway.documents.fhir_controller import FhirController
 from gateway.documents.report_controller import ReportController
+from gateway.https_gate import PlainHttpGate
 from gateway.jobs.supervisor import Workers
 from gateway.pages import NAV, SITE_NAME
 from gateway.phones.app_routes import APP_PATH, CompanionAppController
@@ -38,6 +40,7 @@ from gateway.records.parts_controller import PART_CONTROLLERS
 from gateway.scheduler import start_scheduler
 from gateway.site import TEMPLATE_DIRS, page_controllers
 from gateway.storage.database import Database
+from gateway.tls import ensure_ca, fingerprint, https_wanted
 from gateway.transfers.controller import TransferController
 from gateway.wounds.controller import PatientHealingController, PatientWoundsController, WoundController
 from schemas.config import Config
@@ -78,7 +81,7 @@ def create_app(config: Config, *, start_workers: bool = False) -> Litestar:
         dependencies={
             "services": Provide(provide_services, sync_to_thread=False, use_cache=True),
         },
-        middleware=[security_headers, csrf_protection, session_auth],
+        middleware=[*_plain_http_gate(config), security_headers, csrf_protection, session_auth],
         template_config=template_config(TEMPLATE_DIRS, clock),
         exception_handlers=EXCEPTION_HANDLERS,
         openapi_config=OpenAPIConfig(
@@ -96,6 +99,7 @@ def create_app(config: Config, *, start_workers: bool = False) -> Litestar:
                 NAV_KEY: NAV,
                 CLOCK_KEY: clock,
                 APP_PATH_KEY: f"{APP_PATH}/",
+                FINGERPRINT_KEY: _authority_fingerprint(config),
             }
         ),
         on_startup=[lambda app: _start_background(app, services, workers)],
@@ -103,6 +107,18 @@ def create_app(config: Config, *, start_workers: bool = False) -> Litestar:
         request_max_body_size=config.gateway.max_body_bytes,
         plugins=[ClosedStructSchemaPlugin()],
     )
+
+
+def _authority_fingerprint(config: Config) -> str | None:
+    """The gateway's own certificate authority (made now on first start) when it serves HTTPS."""
+    if not https_wanted(config.gateway):
+        return None
+    return fingerprint(ensure_ca(keys_dir(config), config.report.clinic_name))
+
+
+def _plain_http_gate(config: Config) -> list:
+    """Plain HTTP answers other machines only what a phone needs before it trusts the HTTPS address."""
+    return [PlainHttpGate(config.gateway)] if https_wanted(config.gateway) else []
 
 
 def _start_background(app: Litestar, services: Services, workers: Workers | None) -> None:

@@ -18,6 +18,7 @@ TEMPLATE_DIRS = [
     ROOT / "analyses" / "templates",
     ROOT / "documents" / "templates",
     ROOT / "transfers" / "templates",
+    ROOT / "phones" / "templates",
     SHARED_TEMPLATES,
 ]
 """Where the gateway's page templates are, each domain's own first; a name is unique across them."""
@@ -30,6 +31,7 @@ def page_controllers() -> list:
     from gateway.analyses.pages import AnalysisPages
     from gateway.capture.picture_pages import PicturePages
     from gateway.documents.pages import ReportPages
+    from gateway.phones.setup_pages import PhoneSetupPages
     from gateway.records.burn_chart_pages import BurnChartPages
     from gateway.records.encounter_pages import EncounterPages
     from gateway.records.patient_pages import PatientPages
@@ -48,4 +50,5 @@ def page_controllers() -> list:
         EncounterSendPages,
         TransferPages,
         AdminPages,
+        PhoneSetupPages,
     ]

@@ -23,7 +23,16 @@ class GatewayConfig(Message):
     host: str = "127.0.0.1"
     """Address to listen on. Use 0.0.0.0 to let phones on the clinic network connect."""
     port: Annotated[int, msgspec.Meta(ge=1, le=65535)] = 8080
-    """TCP port of the HTTP API."""
+    """TCP port of the HTTP API (and of the pages)."""
+    https: Literal["auto", "on", "off"] = "auto"
+    """HTTPS with the gateway's own certificate authority (docs/security.md): 'auto' serves it when `host` is not
+    loopback (phones need it for the camera and offline use), 'on' always, 'off' never. Plain HTTP then answers
+    loopback as before, gives other machines the authority's certificate and the phone setup page, and redirects
+    the rest to HTTPS."""
+    https_port: Annotated[int, msgspec.Meta(ge=1, le=65535)] = 8443
+    """TCP port of HTTPS."""
+    tls_names: list[str] = msgspec.field(default_factory=list)
+    """Extra host names or addresses the certificate names (its own host name and addresses are always in)."""
     database: str = "burnedge.sqlite3"
     """Path of the SQLite database file (created if missing)."""
     sqlite_synchronous: Literal["FULL", "NORMAL"] = "FULL"
@@ -42,6 +51,8 @@ class GatewayConfig(Message):
     UTC)."""
 
     def __post_init__(self) -> None:
+        if self.https_port == self.port and self.https != "off":
+            raise msgspec.ValidationError(f"https_port {self.https_port} is the HTTP port: give HTTPS its own port")
         if self.timezone:
             try:
                 zoneinfo.ZoneInfo(self.timezone)

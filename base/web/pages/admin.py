@@ -17,7 +17,7 @@ from litestar.params import QueryParameter
 from litestar.response import Redirect, Template
 
 from base.web.pages.forms import FormBody, FormInvalid, field_errors, form_fields, parse_form
-from base.web.pages.pairing_link import PairingLink, pairing_link
+from base.web.pages.pairing_link import FINGERPRINT_KEY, PairingLink, pairing_link
 from base.web.pages.rendering import page
 from base.web.paths import IdPath
 from base.web.site import AuthedRequest, SiteServices, SiteServicesDep
@@ -97,6 +97,7 @@ def _admin_page(request: AuthedRequest, services: SiteServices, view: AdminView,
         pairing_error=view.pairing_errors.get(""),
         pairing_code=view.pairing_code,
         pairing_link=view.pairing_link,
+        ca_fingerprint=request.app.state.get(FINGERPRINT_KEY),
         audit=view.audit,
         done=view.done,
     )

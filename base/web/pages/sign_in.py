@@ -33,7 +33,8 @@ def safe_next(target: object) -> str:
 
 
 def _secure(request: Request) -> bool:
-    return request.app.state.services.config.security.cookie_secure
+    """Secure cookies when configured, and always on a page served over HTTPS (the gateway's own, for phones)."""
+    return request.app.state.services.config.security.cookie_secure or request.url.scheme == "https"
 
 
 class SignInController(Controller):

@@ -14,8 +14,8 @@ let running = false;
 async function route() {
   leaveCapture();
   const hash = window.location.hash || "#/";
-  const pairing = hash.match(/^#pair=([A-Za-z0-9-]+)/);
-  if (pairing) return pairScreen(pairing[1]);
+  const pairing = hash.match(/^#pair=([A-Za-z0-9-]+)(?:&fp=([0-9A-Fa-f]+))?/);
+  if (pairing) return pairScreen(pairing[1], pairing[2] || "");
   if (!(await kv.get("device"))) return pairScreen();
   if (!(await session())) return signInScreen();
   const [, screen, a, b] = hash.split("/");

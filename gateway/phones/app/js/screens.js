@@ -21,10 +21,13 @@ async function choicesOf() {
   return choices;
 }
 
-export async function pairScreen(code = "") {
+export async function pairScreen(code = "", fingerprint = "") {
+  const shown = fingerprint.toUpperCase().match(/../g)?.join(":") || "";
   show(
     html`<h1>Pair this phone</h1>
       <p>The clinic's administrator gives a one-time code (or a QR code that opens this page with it).</p>
+      ${shown ? html`<p class="hint">This gateway's certificate begins <code>${shown}</code>: it must match the
+        Administration page.</p>` : ""}
       <form id="pair" class="stack">
         <label>Pairing code <input name="code" required autocomplete="one-time-code" value="${code}"></label>
         <button type="submit">Pair</button>
