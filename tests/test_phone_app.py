@@ -7,15 +7,22 @@ back to the phone."""
 from __future__ import annotations
 
 import hashlib
-import time
 from pathlib import Path
 
 import httpx
 import pytest
 
-from harness.browser import CHROMIUM, CHROMIUM_ARGS, PHONE, browser_missing, shot
-from harness.processes import PASSWORD, GatewayProcess, free_port
-from harness.sites import cli
+from harness.browser import CHROMIUM, CHROMIUM_ARGS, browser_missing, shot
+from tests.phone_app_helpers import (
+    PHONE_PHOTOS,
+    gateway_with_staff,
+    pair_and_sign_in,
+    pairing_code,
+    phone_context,
+    phone_photos,
+    poll,
+    staff_headers,
+)
 
 pytestmark = pytest.mark.skipif(bool(browser_missing()), reason=browser_missing() or "browser present")
 PHOTOS = 3
@@ -35,20 +42,7 @@ def fake_camera(folder: Path) -> Path:
 @pytest.fixture(scope="module")
 def gateway(tmp_path_factory):
     folder = tmp_path_factory.mktemp("phone")
-    process = GatewayProcess(folder / "gateway.sqlite3", free_port())
-    for name, role in (("admin", "admin"), ("nurse", "nurse")):
-        cli(
-            "--db",
-            str(process.db),
-            "users",
-            "add",
-            "--username",
-            name,
-            "--role",
-            role,
-            "--password-stdin",
-            stdin=PASSWORD,
-        )
+    process = gateway_with_staff(folder)
     process.start()
     yield process, folder
     process.stop()
@@ -72,45 +66,15 @@ def phone_browser(gateway):
         browser.close()
 
 
-def poll(page, script: str, timeout_s: float = 30.0):
-    deadline = time.monotonic() + timeout_s
-    while not (value := page.evaluate(script)):
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out after {timeout_s:g} s waiting for {script}")
-        page.wait_for_timeout(250)
-    return value
-
-
-PHONE_PHOTOS = """async () => {
-  const db = await new Promise((ok, fail) => { const r = indexedDB.open("burnedge-app"); r.onsuccess = () => ok(r.result); r.onerror = fail; });
-  const all = await new Promise((ok) => { const r = db.transaction("photos").objectStore("photos").getAll(); r.onsuccess = () => ok(r.result); });
-  db.close();
-  return all.map((p) => ({ id: p.id, sha256: p.sha256, state: p.state, asset: p.asset, taken_at: p.taken_at,
-    device_verdict: p.device_verdict, disagrees: p.disagrees }));
-}"""
-
-
 def test_a_nurse_pairs_captures_offline_and_nothing_is_lost(gateway, phone_browser):
     process, _ = gateway
     browser = phone_browser
-    admin = httpx.post(f"{process.url}/api/v1/auth/login", json={"username": "admin", "password": PASSWORD}).json()
-    code = httpx.post(
-        f"{process.url}/api/v1/admin/pairing-codes",
-        json={"device_name": "ward phone"},
-        headers={"Authorization": f"Bearer {admin['access_token']}"},
-    ).json()["code"]
-    context = browser.new_context(
-        viewport={"width": PHONE[0], "height": PHONE[1]}, has_touch=True, is_mobile=True, permissions=["camera"]
-    )
+    code = pairing_code(process.url)
+    context = phone_context(browser, permissions=["camera"])
     page = context.new_page()
     try:
         # 1. Pair from the QR code's address, then sign in once for the shift.
-        page.goto(f"{process.url}/app/#pair={code}")
-        page.get_by_role("button", name="Pair").click()
-        page.get_by_label("User name").fill("nurse")
-        page.get_by_label("Password").fill(PASSWORD)
-        page.get_by_role("button", name="Sign in").click()
-        page.get_by_role("heading", name="Patients").wait_for()
+        pair_and_sign_in(page, process.url, code)
         poll(page, "navigator.serviceWorker.controller !== null || navigator.serviceWorker.ready.then(() => true)")
         shot(page, "phone-patients")
 
@@ -148,7 +112,7 @@ def test_a_nurse_pairs_captures_offline_and_nothing_is_lost(gateway, phone_brows
                 page.get_by_role("button", name="Take it anyway").click()
             page.get_by_text(f"{n} photos of left forearm on this phone").wait_for()
         shot(page, "phone-capture")
-        taken = page.evaluate(PHONE_PHOTOS)
+        taken = phone_photos(page)
         assert len(taken) == PHOTOS and all(p["state"] == "queued" for p in taken)
         assert all(p["device_verdict"]["figures"]["markers"] for p in taken)  # judged on the phone before it left
         assert page.locator(".ring .arc-done, .ring circle.arc-done").count() >= 1  # the ring fills
@@ -177,8 +141,7 @@ def test_a_nurse_pairs_captures_offline_and_nothing_is_lost(gateway, phone_brows
     finally:
         context.close()
 
-    nurse = httpx.post(f"{process.url}/api/v1/auth/login", json={"username": "nurse", "password": PASSWORD}).json()
-    headers = {"Authorization": f"Bearer {nurse['access_token']}"}
+    headers = staff_headers(process.url)
     for photo in stored:
         asset = httpx.get(f"{process.url}/api/v1/assets/{photo['asset']['id']}", headers=headers).json()
         body = httpx.get(f"{process.url}/api/v1/assets/{asset['id']}/file", headers=headers).content

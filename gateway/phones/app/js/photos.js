@@ -44,8 +44,16 @@ export async function keepPhoto(blob, { encounterId, woundId, takenAt, source, d
     asset: null,
     error: "",
   };
-  await put("photo_bytes", { id, blob });
-  await put("photos", photo);
+  try {
+    await put("photo_bytes", { id, blob });
+    await put("photos", photo);
+  } catch (error) {
+    await remove("photo_bytes", id).catch(() => {});
+    throw new Error(
+      `the phone's storage is full (${error.name || error.message}): upload the photos waiting, or free space ` +
+        "on the phone, before taking more. This photo was not kept; the ones before it are.",
+    );
+  }
   return photo;
 }
 

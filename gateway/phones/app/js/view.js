@@ -37,7 +37,7 @@ export function show(markup, binds = {}) {
 
 export function banner(text, kind = "info") {
   const node = document.getElementById("banner");
-  node.textContent = text;
+  node.textContent = text ? text[0].toUpperCase() + text.slice(1) : "";
   node.className = `banner banner-${kind}`;
   node.hidden = !text;
 }
