@@ -7,14 +7,14 @@ back to the phone."""
 from __future__ import annotations
 
 import hashlib
-from pathlib import Path
 
 import httpx
 import pytest
 
 from harness.browser import CHROMIUM, CHROMIUM_ARGS, browser_missing, shot
-from tests.phone_app_helpers import (
+from harness.phone_app import (
     PHONE_PHOTOS,
+    fake_camera,
     gateway_with_staff,
     pair_and_sign_in,
     pairing_code,
@@ -26,17 +26,6 @@ from tests.phone_app_helpers import (
 
 pytestmark = pytest.mark.skipif(bool(browser_missing()), reason=browser_missing() or "browser present")
 PHOTOS = 3
-
-
-def fake_camera(folder: Path) -> Path:
-    """An MJPEG file of a rendered burn phantom seen from around it, for Chromium's fake camera."""
-    from tests.phantom_helpers import render_small_patch
-
-    phantom = render_small_patch(folder / "phantom")
-    frames = sorted((phantom / "images").glob("*.jpg"))
-    video = folder / "orbit.mjpeg"
-    video.write_bytes(b"".join(f.read_bytes() for f in frames for _ in range(15)))  # half a second per view
-    return video
 
 
 @pytest.fixture(scope="module")

@@ -13,8 +13,7 @@ import httpx
 import pytest
 
 from harness.browser import CHROMIUM, CHROMIUM_ARGS, browser_missing, shot
-from harness.sites import noise_photo
-from tests.phone_app_helpers import (
+from harness.phone_app import (
     gateway_with_staff,
     pair_and_sign_in,
     pairing_code,
@@ -23,6 +22,7 @@ from tests.phone_app_helpers import (
     poll,
     staff_headers,
 )
+from harness.sites import noise_photo
 
 pytestmark = pytest.mark.skipif(bool(browser_missing()), reason=browser_missing() or "browser present")
 SLOW_UPLOAD = 300 * 1024

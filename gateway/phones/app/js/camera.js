@@ -7,7 +7,9 @@ export function hasCamera() {
 export async function openCamera(video) {
   const stream = await navigator.mediaDevices.getUserMedia({
     audio: false,
-    video: { facingMode: { ideal: "environment" }, width: { ideal: 4032 }, height: { ideal: 3024 } },
+    // A preview of moderate size keeps the per-frame checks cheap; stills come at the camera's full resolution
+    // from ImageCapture (below), not from the preview.
+    video: { facingMode: { ideal: "environment" }, width: { ideal: 1920 }, height: { ideal: 1440 } },
   });
   video.srcObject = stream;
   await video.play();
@@ -22,7 +24,12 @@ export async function still(video, stream) {
   const track = stream.getVideoTracks()[0];
   if ("ImageCapture" in window && track) {
     try {
-      const blob = await new window.ImageCapture(track).takePhoto();
+      const capture = new window.ImageCapture(track);
+      const largest = await capture.getPhotoCapabilities().then(
+        (c) => ({ imageWidth: c.imageWidth?.max, imageHeight: c.imageHeight?.max }),
+        () => ({}),
+      );
+      const blob = await capture.takePhoto(largest.imageWidth ? largest : undefined);
       if (blob?.size) return blob;
     } catch {
       // some cameras take no photos through ImageCapture: the video frame below is the still

@@ -106,6 +106,7 @@ export async function captureScreen(encounterId, woundId, onQueued) {
       $("check").textContent = describe(latest, view);
       $("check").dataset.ok = latest.reasons.length ? "no" : "yes";
       $("check").dataset.ms = latest.ms.toFixed(1);
+      $("check").dataset.phases = JSON.stringify(latest.phases);
       drawRing();
     }
     timer = setTimeout(loop, CHECK_EVERY_MS);

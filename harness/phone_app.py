@@ -1,5 +1,5 @@
-"""What the phone app's browser tests share: a gateway process with an administrator and a nurse, a pairing code,
-a phone-sized context, pairing and signing in as a nurse would, and reading the phone's own photo queue."""
+"""What the phone app's browser tests and benchmark share: a gateway process with an administrator and a nurse, a
+pairing code, a phone-sized context, pairing and signing in as a nurse would, and reading the phone's own photo queue."""
 
 from __future__ import annotations
 
@@ -80,3 +80,27 @@ def poll(page, script: str, timeout_s: float = 30.0):
 
 def phone_photos(page) -> list[dict]:
     return page.evaluate(PHONE_PHOTOS)
+
+
+def fake_camera(folder: Path) -> Path:
+    """An MJPEG file of a rendered burn phantom seen from around it (8 views, half a second each), for Chromium's
+    fake camera (--use-file-for-fake-video-capture)."""
+    from processing.phantom.generate import run as render_phantom  # native libraries: only where used
+    from schemas.phantom import PhantomShape, PhantomSpec
+
+    phantom = folder / "phantom"
+    spec = PhantomSpec(shape=PhantomShape.patch, seed=12, area_cm2=16.0, depth_mm=2.5, views=8, width=960, height=720)
+    render_phantom(spec, phantom)
+    frames = sorted((phantom / "images").glob("*.jpg"))
+    video = folder / "orbit.mjpeg"
+    video.write_bytes(b"".join(f.read_bytes() for f in frames for _ in range(15)))
+    return video
+
+
+def camera_args(video: Path) -> list[str]:
+    """Chromium flags: a fake camera playing `video`, its permission prompt answered yes."""
+    return [
+        "--use-fake-ui-for-media-stream",
+        "--use-fake-device-for-media-stream",
+        f"--use-file-for-fake-video-capture={video}",
+    ]
