@@ -16,13 +16,19 @@ from schemas.errors import AuthenticationFailed, TooManyAttempts
 from schemas.ids import uuid7
 from tests.conftest import make_user
 
-# The ways in: logging in and pairing a phone. Everything else needs a session.
+# The ways in (logging in, pairing a phone) and what a phone needs before it can: the capture settings, the
+# marker sheet, the gateway's certificate authority and the setup page, none holding patient data. Everything else
+# needs a session.
 UNAUTHENTICATED = {
     ("POST", "/api/v1/auth/login"),
     ("POST", "/api/v1/auth/pair"),
     ("GET", "/health"),
     ("GET", "/sign-in"),
     ("POST", "/sign-in"),
+    ("GET", "/api/v1/capture/settings"),
+    ("GET", "/marker-sheet.pdf"),
+    ("GET", "/ca.crt"),
+    ("GET", "/phone-setup"),
 }
 
 
@@ -33,8 +39,8 @@ def _concrete(path: str) -> str:
 def test_every_endpoint_except_health_and_the_ways_in_requires_authentication(app, client):
     checked = 0
     for route in app.routes:
-        # The API docs and the pages' static files are public (tests/test_page_assets.py).
-        if route.path.startswith(("/schema", "/static/")):
+        # The API docs, the pages' static files and the phone app's own files are public (tests/test_page_assets.py).
+        if route.path.startswith(("/schema", "/static/", "/app")):
             continue
         for method in sorted(route.methods - {"OPTIONS", "HEAD"}):
             if (method, route.path) in UNAUTHENTICATED:

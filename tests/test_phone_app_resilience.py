@@ -150,7 +150,7 @@ def test_a_full_phone_refuses_the_next_photo_with_the_reason_and_keeps_the_other
             message = page.locator("#banner").inner_text()
             if "not kept" in message:
                 break
-        shot(page, "phone-storage-full")
+        shot(page, "phone-storage-full", readme="app-storage-full.png")
         kept = phone_photos(page)
     finally:
         context.close()

@@ -209,7 +209,7 @@ export async function encounterScreen(encounterId) {
               method: "POST",
               body: woundId ? { wound_id: woundId } : {},
             });
-            banner(`Analysis queued (${job.state}); its result comes to this phone when it is done.`, "ok");
+            banner(`Measurement asked for (${job.state === "queued" ? "waiting its turn" : job.state}): its result comes to this phone when it is done.`, "ok");
           } catch (error) {
             banner(error instanceof NotInReach ? "Measuring needs the gateway: it waits until you are back in reach." : error.message, "error");
           }
@@ -223,8 +223,9 @@ function figures(analysis) {
   const m = analysis.result?.metrics || {};
   const c = analysis.result?.confidence;
   if (m.area_cm2 == null) return html`no measurement in cm (${analysis.result?.reason || analysis.result?.status})`;
+  const scale = analysis.result?.scale?.method === "marker" ? "scale from the printed marker" : "scale from ruler points";
   return html`area ${m.area_cm2.toFixed(1)} cm², perimeter ${m.perimeter_cm?.toFixed(1) ?? "–"} cm,
-    confidence ${c?.level || "not stated"} <span class="muted">(decision support, not a diagnosis)</span>`;
+    confidence ${c?.level || "not stated"} <span class="muted">(${scale}; decision support, not a diagnosis)</span>`;
 }
 
 function photoList(list) {
