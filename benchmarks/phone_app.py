@@ -170,7 +170,7 @@ def main() -> None:
                 page.get_by_role("button", name="Add patient").click()
                 page.get_by_role("button", name="Start encounter").click()
                 page.get_by_role("link", name="Photograph the burn").click()
-                poll(page, "document.getElementById('check').dataset.ms !== undefined", 60)
+                poll(page, "document.getElementById('check')?.dataset.ms !== undefined", 60)
                 check = checks(page, 20)
                 queued = queue(page, folder, args.photos)
                 browser.close()
