@@ -137,6 +137,17 @@ def test_a_nurse_pairs_captures_offline_and_nothing_is_lost(gateway, phone_brows
         page.get_by_text("Measurement asked for").wait_for()
         poll(page, "(window.dispatchEvent(new Event('online')), document.querySelector('#analyses li') !== null)", 300)
         result = page.locator("#analyses li").first.inner_text()
+        # The report, kept on the phone: it opens offline.
+        page.get_by_role("button", name="Keep the report on this phone").click()
+        page.get_by_role("link", name="Open the report kept on this phone").wait_for()
+        context.set_offline(True)
+        page.reload()
+        report = page.get_by_role("link", name="Open the report kept on this phone")
+        head = page.evaluate(
+            "(a) => fetch(a.href).then((r) => r.text()).then((t) => t.slice(0, 5))", report.element_handle()
+        )
+        assert head == "%PDF-"
+        context.set_offline(False)
         shot(page, "phone-analysis", readme="app-analysis.png")
         for width, height, name in ((768, 1024, "tablet"), (1280, 900, "desktop")):
             page.set_viewport_size({"width": width, "height": height})

@@ -23,6 +23,7 @@ from harness.phone_app import (
     staff_headers,
 )
 from harness.sites import noise_photo
+from tests.capture_images import video as clip
 
 pytestmark = pytest.mark.skipif(bool(browser_missing()), reason=browser_missing() or "browser present")
 SLOW_UPLOAD = 300 * 1024
@@ -160,6 +161,29 @@ def test_a_full_phone_refuses_the_next_photo_with_the_reason_and_keeps_the_other
     assert {p["sha256"] for p in kept} == taken  # every photo before the refused one is still there
 
 
+def test_a_short_video_instead_of_stills_reaches_the_gateway_as_a_video(gateway, browser, tmp_path):
+    video = tmp_path / "round.mp4"
+    clip(video)  # two seconds of H.264, as a phone films
+    context = phone_context(browser)
+    page = context.new_page()
+    try:
+        pair_and_sign_in(page, gateway.url, pairing_code(gateway.url))
+        _to_capture(page, gateway.url)
+        page.locator("#video").set_input_files([str(video)])
+        stored = poll(page, "(window.dispatchEvent(new Event('online')), " + PHONE_ONE_STORED + ")", 60)
+    finally:
+        context.close()
+    headers = staff_headers(gateway.url)
+    asset = httpx.get(f"{gateway.url}/api/v1/assets/{stored['asset']['id']}", headers=headers).json()
+    assert asset["kind"] == "video" and asset["sha256"] == hashlib.sha256(video.read_bytes()).hexdigest()
+    assert stored["asset"]["verdict"] is None  # a video has no verdict of its own: its frames are judged
+
+
+PHONE_ONE_STORED = """indexedDB.databases().then(() => new Promise((ok) => {
+  const r = indexedDB.open("burnedge-app");
+  r.onsuccess = () => { const q = r.result.transaction("photos").objectStore("photos").getAll();
+    q.onsuccess = () => { r.result.close(); const p = q.result.find((x) => x.state === "stored"); ok(p || false); }; };
+}))"""
 PHONE_PHOTOS_UPLOADING = """async () => {
   const db = await new Promise((ok) => { const r = indexedDB.open("burnedge-app"); r.onsuccess = () => ok(r.result); });
   const all = await new Promise((ok) => { const r = db.transaction("photos").objectStore("photos").getAll(); r.onsuccess = () => ok(r.result); });

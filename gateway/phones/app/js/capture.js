@@ -52,6 +52,9 @@ export async function captureScreen(encounterId, woundId, onQueued) {
         <span id="taken" role="status" aria-live="polite"></span></p>
       <label class="fallback">Or use the phone's camera app
         <input id="fallback" type="file" accept="image/*" capture="environment" multiple></label>
+      <label class="fallback">Or film a short video instead, walking round the burn (10 to 20 s): the gateway
+        takes its frames
+        <input id="video" type="file" accept="video/*" capture="environment"></label>
       <p><a class="button" href="#/encounter/${encounterId}">Done</a></p>`,
   );
   const $ = (id) => screen.querySelector(`#${id}`);
@@ -79,6 +82,12 @@ export async function captureScreen(encounterId, woundId, onQueued) {
   $("taken").textContent = `${await count()} photos of ${label} on this phone; ${filled.size} of ${sectors + 1} angles`;
   drawRing();
   if (!encounter) banner("This encounter is not on this phone.", "error");
+  $("video").addEventListener("change", async (event) => {
+    for (const file of event.target.files) {
+      await keep(file, "video", file.lastModified ? localIso(new Date(file.lastModified)) : localIso(), null, null);
+    }
+    event.target.value = "";
+  });
   $("fallback").addEventListener("change", async (event) => {
     for (const file of event.target.files) {
       await keep(file, "file", file.lastModified ? localIso(new Date(file.lastModified)) : localIso(), null, null);

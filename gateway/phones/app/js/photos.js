@@ -7,6 +7,9 @@ import { all, get, put, record, remove } from "./store.js";
 const HEADROOM = 50 * 1024 * 1024;
 const CHUNK = 1024 * 1024;
 
+const EXTENSIONS = { "video/mp4": ".mp4", "video/quicktime": ".mov", "image/png": ".png", "image/heic": ".heic" };
+const extension = (type) => EXTENSIONS[type] || ".jpg";
+
 export const mb = (bytes) => `${(bytes / 1024 / 1024).toFixed(bytes < 10 * 1024 * 1024 ? 1 : 0)} MB`;
 
 export async function room(bytes = 0) {
@@ -28,7 +31,7 @@ export async function keepPhoto(blob, { encounterId, woundId, takenAt, source, d
   const taken = takenAt || localIso();
   const photo = {
     id,
-    name: `burn-${taken.slice(0, 19).replace(/[-:]/g, "").replace("T", "-")}-${id.slice(-4)}.jpg`,
+    name: `burn-${taken.slice(0, 19).replace(/[-:]/g, "").replace("T", "-")}-${id.slice(-4)}${extension(blob.type)}`,
     size: blob.size,
     type: blob.type || "image/jpeg",
     sha256: await sha256Hex(blob),

@@ -3,7 +3,7 @@
 import { call, NotInReach, pair, session, signIn } from "./api.js";
 import { localIso, uuid7 } from "./ids.js";
 import { forget, mb, photos } from "./photos.js";
-import { kv, record, records } from "./store.js";
+import { get, kv, put, record, records } from "./store.js";
 import { change, settle, waiting } from "./sync.js";
 import { banner, formData, html, localInput, show, when } from "./view.js";
 
@@ -188,6 +188,8 @@ export async function encounterScreen(encounterId) {
     .filter((a) => a.data.encounter_id === encounterId)
     .sort((a, b) => b.data.completed_at.localeCompare(a.data.completed_at));
   const advice = (await records("consultation")).filter((a) => a.data.encounter_id === encounterId);
+  const reportUrl = `/api/v1/encounters/${encounterId}/report.pdf`;
+  const kept = await get("documents", reportUrl);
   const targets = wounds.length ? wounds : [{ id: "", data: { label: "the burn" } }];
   show(
     html`<h1>${name(patient)}</h1><p class="muted">Encounter ${when(encounter.data.time_of_arrival)}</p>
@@ -199,8 +201,25 @@ export async function encounterScreen(encounterId) {
       <h2>Analyses</h2>
       ${targets.map((w) => html`<p><button type="button" data-analyse="${w.id}">Measure ${w.data.label} in 3D</button></p>`)}
       <ul class="list" id="analyses">${analyses.map((a) => html`<li>${when(a.data.completed_at)}: ${figures(a.data)}</li>`)}</ul>
-      ${advice.length ? html`<h2>Burn center advice</h2>${advice.map((a) => html`<p><strong>${a.data.note.consultant}</strong>: ${a.data.note.advice}</p>`)}` : ""}`,
+      ${advice.length ? html`<h2>Burn center advice</h2>${advice.map((a) => html`<p><strong>${a.data.note.consultant}</strong>: ${a.data.note.advice}</p>`)}` : ""}
+      <h2>Report</h2>
+      ${kept ? html`<p><a id="kept-report" href="${URL.createObjectURL(kept.blob)}" download="burn-report-${encounterId.slice(-6)}.pdf">Open the report kept on this phone</a>
+        <span class="muted">(as made ${when(kept.fetched_at)})</span></p>` : ""}
+      <p><button type="button" id="keep-report">${kept ? "Fetch the report again" : "Keep the report on this phone"}</button></p>`,
     {
+      "#keep-report": {
+        click: async () => {
+          try {
+            const held = await session();
+            const response = await fetch(reportUrl, { headers: { Authorization: `Bearer ${held?.access_token}` }, cache: "no-store" });
+            if (!response.ok) throw new Error((await response.json().catch(() => ({}))).detail || `report refused (${response.status})`);
+            await put("documents", { url: reportUrl, blob: await response.blob(), fetched_at: new Date().toISOString() });
+            encounterScreen(encounterId);
+          } catch (error) {
+            banner(error instanceof TypeError ? "The report needs the gateway: it is kept once fetched." : error.message, "error");
+          }
+        },
+      },
       "[data-analyse]": {
         click: async (event) => {
           const woundId = event.target.dataset.analyse;
@@ -233,7 +252,8 @@ function photoList(list) {
   return html`<ul class="list photos">${list.map((p) => {
     const verdict = p.asset?.verdict;
     const judged = verdict ? (verdict.accepted ? "usable" : `retake: ${verdict.guidance.join(" ")}`) : "";
-    return html`<li data-photo="${p.id}" data-state="${p.state}">${when(p.taken_at)} · ${mb(p.size)} ·
+    const kind = p.type?.startsWith("video/") ? "video · " : "";
+    return html`<li data-photo="${p.id}" data-state="${p.state}">${kind}${when(p.taken_at)} · ${mb(p.size)} ·
       <span class="badge badge-${p.state}">${p.state === "stored" ? "at the gateway" : p.state}</span>
       ${judged ? html`<span class="verdict">${judged}</span>` : ""}${p.error ? html`<span class="error">${p.error}</span>` : ""}</li>`;
   })}</ul>`;
