@@ -28,7 +28,7 @@ from pathlib import Path
 
 import httpx
 
-from gateway.phones.app_routes import service_worker
+from gateway.phones.app_routes import APP_PATH, shell_paths
 from harness.browser import CHROMIUM, CHROMIUM_ARGS
 from harness.phone_app import (
     camera_args,
@@ -64,15 +64,10 @@ def _page_resources(url: str, path: str) -> list[str]:
 
 
 def shell(url: str) -> dict:
-    app_paths = json_list(service_worker().body)
+    app_paths = [f"{APP_PATH}/", *shell_paths()]
     app = _sizes(url, app_paths)
     pages = _sizes(url, _page_resources(url, "/sign-in"))
     return {"app_served": app[0], "app_gzip": app[1], "pages_served": pages[0], "pages_gzip": pages[1]}
-
-
-def json_list(worker: bytes) -> list[str]:
-    line = next(x for x in worker.decode().splitlines() if x.startswith("const SHELL = "))
-    return json.loads(line.removeprefix("const SHELL = ").rstrip(";"))
 
 
 def starts(context, url: str, runs: int) -> dict:

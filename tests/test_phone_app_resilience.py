@@ -14,6 +14,7 @@ import pytest
 
 from harness.browser import CHROMIUM, CHROMIUM_ARGS, browser_missing, shot
 from harness.phone_app import (
+    PHONE_PHOTOS,
     gateway_with_staff,
     pair_and_sign_in,
     pairing_code,
@@ -86,14 +87,16 @@ def test_a_gateway_restarted_in_the_middle_of_an_upload_loses_nothing(gateway, b
         page.evaluate("window.dispatchEvent(new Event('online'))")
         poll(page, "fetch('/health').then(() => true)")
         # The first photo is on its way: the gateway stops (SIGTERM), then starts again on the same database.
-        started = poll(page, f"({PHONE_PHOTOS_UPLOADING})()", 60)
+        started = poll(
+            page, f"({PHONE_PHOTOS})().then((ps) => ps.some((p) => p.state === 'uploading' && p.upload_url))", 60
+        )
         gateway.stop()
         gateway.start()
         link.send("Network.emulateNetworkConditions", {**slow, "uploadThroughput": -1})
         page.evaluate("window.dispatchEvent(new Event('online'))")
         stored = poll(
             page,
-            "(" + PHONE_STORED + ")()",
+            f"({PHONE_PHOTOS})().then((ps) => ps.length === 2 && ps.every((p) => p.state === 'stored') && ps)",
             120,
         )
         shot(page, "phone-resumed")
@@ -170,29 +173,15 @@ def test_a_short_video_instead_of_stills_reaches_the_gateway_as_a_video(gateway,
         pair_and_sign_in(page, gateway.url, pairing_code(gateway.url))
         _to_capture(page, gateway.url)
         page.locator("#video").set_input_files([str(video)])
-        stored = poll(page, "(window.dispatchEvent(new Event('online')), " + PHONE_ONE_STORED + ")", 60)
+        stored = poll(
+            page,
+            "(window.dispatchEvent(new Event('online')), "
+            + f"({PHONE_PHOTOS})().then((ps) => ps.find((p) => p.state === 'stored') || false))",
+            60,
+        )
     finally:
         context.close()
     headers = staff_headers(gateway.url)
     asset = httpx.get(f"{gateway.url}/api/v1/assets/{stored['asset']['id']}", headers=headers).json()
     assert asset["kind"] == "video" and asset["sha256"] == hashlib.sha256(video.read_bytes()).hexdigest()
     assert stored["asset"]["verdict"] is None  # a video has no verdict of its own: its frames are judged
-
-
-PHONE_ONE_STORED = """indexedDB.databases().then(() => new Promise((ok) => {
-  const r = indexedDB.open("burnedge-app");
-  r.onsuccess = () => { const q = r.result.transaction("photos").objectStore("photos").getAll();
-    q.onsuccess = () => { r.result.close(); const p = q.result.find((x) => x.state === "stored"); ok(p || false); }; };
-}))"""
-PHONE_PHOTOS_UPLOADING = """async () => {
-  const db = await new Promise((ok) => { const r = indexedDB.open("burnedge-app"); r.onsuccess = () => ok(r.result); });
-  const all = await new Promise((ok) => { const r = db.transaction("photos").objectStore("photos").getAll(); r.onsuccess = () => ok(r.result); });
-  db.close();
-  return all.some((p) => p.state === "uploading" && p.upload_url);
-}"""
-PHONE_STORED = """async () => {
-  const db = await new Promise((ok) => { const r = indexedDB.open("burnedge-app"); r.onsuccess = () => ok(r.result); });
-  const all = await new Promise((ok) => { const r = db.transaction("photos").objectStore("photos").getAll(); r.onsuccess = () => ok(r.result); });
-  db.close();
-  return all.length === 2 && all.every((p) => p.state === "stored") && all;
-}"""

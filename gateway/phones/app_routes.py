@@ -68,11 +68,15 @@ def choices() -> dict[str, list[dict[str, str]]]:
     }
 
 
+def shell_paths() -> list[str]:
+    """Every address the service worker keeps: the app's own files, then the vendored scripts it loads."""
+    return [f"{APP_PATH}/{name}" for name in app_files() if name] + list(VENDORED)
+
+
 @functools.cache
 def service_worker() -> AppFile:
     """sw.js with the app's version and the list of files it keeps."""
-    shell = [f"{APP_PATH}/{name}" for name in app_files() if name]
-    shell += list(VENDORED)
+    shell = shell_paths()
     digest = hashlib.sha256()
     for name, item in sorted(app_files().items()):
         digest.update(f"{name}\0{item.etag}\0".encode())
