@@ -8,6 +8,8 @@
   online (the baseline);
 - check: the on-device quality check's time per preview frame (the fake camera plays a rendered phantom's orbit),
   with the CPU unthrottled (the baseline) and throttled 4x through CDP;
+- verdicts: `--shots` photos taken with the in-app shutter, each with the phone's verdict, then the gateway's on the
+  uploaded photo: how often the two agree (accepted or not, and the same reasons), and on which reasons they differ;
 - queue: `--photos` photos of about 4 MB each, queued offline through the file input, all found byte for byte in
   IndexedDB afterwards, beside writing the same bytes to a file (the baseline).
 """
@@ -31,6 +33,7 @@ import httpx
 from gateway.phones.app_routes import APP_PATH, shell_paths
 from harness.browser import CHROMIUM, CHROMIUM_ARGS
 from harness.phone_app import (
+    PHONE_PHOTOS,
     camera_args,
     fake_camera,
     gateway_with_staff,
@@ -109,13 +112,42 @@ def checks(page, samples: int) -> dict:
     return out
 
 
+def verdicts(page, shots: int) -> dict:
+    """Photos from the shutter (taken anyway when the checks warn), uploaded; the phone's verdict beside the gateway's."""
+    for _ in range(shots):
+        page.get_by_role("button", name="Take photo").click()
+        anyway = page.get_by_role("button", name="Take it anyway")
+        if anyway.is_visible():
+            anyway.click()
+        page.wait_for_timeout(700)  # the orbit moves on to another view
+    page.evaluate("window.dispatchEvent(new Event('burnedge-change'))")
+    poll(page, f"async () => (await ({PHONE_PHOTOS})()).filter((p) => p.state === 'stored').length >= {shots}", 120)
+    judged = [p for p in phone_photos(page) if p["device_verdict"] and p["asset"]]
+    differing: dict[str, int] = {}
+    same_reasons = 0
+    for photo in judged:
+        phone, gateway = set(photo["device_verdict"]["reasons"]), set(photo["asset"]["verdict"]["reasons"])
+        same_reasons += phone == gateway
+        for reason in phone ^ gateway:
+            side = "phone only" if reason in phone else "gateway only"
+            differing[f"{reason} ({side})"] = differing.get(f"{reason} ({side})", 0) + 1
+    return {
+        "photos": len(judged),
+        "accepted_agree": sum(not p["disagrees"] for p in judged),
+        "same_reasons": same_reasons,
+        "differing": differing,
+    }
+
+
 def queue(page, folder: Path, count: int) -> dict:
     files = [noise_photo(folder / f"q{i}.jpg", 100 + i, size=(2200, 1650), quality=98) for i in range(count)]
     page.context.set_offline(True)
+    before = len(phone_photos(page))
     t0 = time.perf_counter()
     for start in range(0, count, 10):
         page.locator("#fallback").set_input_files([str(f) for f in files[start : start + 10]])
-        poll(page, f"document.getElementById('taken').textContent.startsWith('{min(start + 10, count)} photos')", 120)
+        done = before + min(start + 10, count)
+        poll(page, f"document.getElementById('taken').textContent.startsWith('{done} photos')", 120)
     seconds = time.perf_counter() - t0
     kept = {p["sha256"] for p in phone_photos(page)}
     sent = {hashlib.sha256(f.read_bytes()).hexdigest() for f in files}
@@ -128,7 +160,7 @@ def queue(page, folder: Path, count: int) -> dict:
         "photos": count,
         "mb": sum(f.stat().st_size for f in files) / 1e6,
         "seconds": seconds,
-        "all_kept": kept == sent,
+        "all_kept": sent <= kept,
         "baseline_s": baseline,
     }
 
@@ -141,6 +173,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--runs", type=int, default=5)
     parser.add_argument("--photos", type=int, default=60)
+    parser.add_argument("--shots", type=int, default=12)
     args = parser.parse_args()
     from playwright.sync_api import sync_playwright
 
@@ -167,6 +200,7 @@ def main() -> None:
                 page.get_by_role("link", name="Photograph the burn").click()
                 poll(page, "document.getElementById('check')?.dataset.ms !== undefined", 60)
                 check = checks(page, 20)
+                agreement = verdicts(page, args.shots)
                 queued = queue(page, folder, args.photos)
                 browser.close()
         finally:
@@ -181,6 +215,10 @@ def main() -> None:
     for rate, (values, parts) in check.items():
         split = ", ".join(f"{k} {v:.1f}" for k, v in parts.items())
         print(f"check at {rate}x CPU: median {statistics.median(values):.1f} ms, p95 {p95(values):.1f} ms ({split})")
+    print(
+        f"verdicts: {agreement['photos']} photos; phone and gateway agree on accepting {agreement['accepted_agree']}, "
+        f"on every reason {agreement['same_reasons']}; reasons that differ: {agreement['differing'] or 'none'}"
+    )
     print(
         f"queue: {queued['photos']} photos, {queued['mb']:.0f} MB in {queued['seconds']:.1f} s, all kept byte for "
         f"byte: {queued['all_kept']}; baseline file write {queued['baseline_s']:.2f} s"

@@ -49,8 +49,19 @@ class GatewayConfig(Message):
     """The clinic's time zone, an IANA name such as 'Africa/Nairobi'; empty: this machine's own zone. The pages
     show times in it, name it beside every date-time field, and read a typed time as clinic wall time (stored in
     UTC)."""
+    phone_app_dir: str = ""
+    """Folder of the phone app's files (index.html, sw.js, js/, …); empty: the ones this version ships
+    (gateway/phones/app). Point it at a translated or locally changed copy: phones take the change as an app update
+    on their next visit, and nothing waiting on them is lost."""
 
     def __post_init__(self) -> None:
+        if self.phone_app_dir and not all(
+            (Path(self.phone_app_dir) / name).is_file() for name in ("index.html", "sw.js")
+        ):
+            raise msgspec.ValidationError(
+                f"phone_app_dir {self.phone_app_dir!r} has no index.html and sw.js: point it at a copy of"
+                " gateway/phones/app, or leave it empty for the app this version ships"
+            )
         if self.https_port == self.port and self.https != "off":
             raise msgspec.ValidationError(f"https_port {self.https_port} is the HTTP port: give HTTPS its own port")
         if self.timezone:

@@ -54,3 +54,11 @@ def test_list_settings_come_comma_separated_from_the_environment():
     assert cfg.security.paired_device_roles == ["clinician", "nurse"]
     with pytest.raises(InvalidInput):
         load_config(None, environ={"BURNEDGE_SECURITY_PAIRED_DEVICE_ROLES": "janitor"})
+
+
+def test_a_phone_app_folder_without_the_app_is_refused_with_what_to_do(tmp_path):
+    with pytest.raises(InvalidInput, match="has no index.html and sw.js: point it at a copy of gateway/phones/app"):
+        load_config(None, environ={"BURNEDGE_GATEWAY_PHONE_APP_DIR": str(tmp_path)})
+    for name in ("index.html", "sw.js"):
+        (tmp_path / name).write_text("")
+    assert load_config(None, environ={"BURNEDGE_GATEWAY_PHONE_APP_DIR": str(tmp_path)}).gateway.phone_app_dir

@@ -106,16 +106,18 @@ export async function captureScreen(encounterId, woundId, onQueued) {
     return noCamera(error.message);
   }
   $("shutter").disabled = false;
-  const loop = () => {
+  const loop = async () => {
     if (!stream) return;
     if (settings && video.videoWidth) {
-      latest = check(video, video.videoWidth, video.videoHeight, settings, canvas);
+      latest = await check(video, video.videoWidth, video.videoHeight, settings, canvas);
+      if (!stream) return;
       const marker = latest.figures.markers[0];
       view = pose(marker, video.videoWidth, video.videoHeight, settings.marker.side_mm, settings.readiness.default_focal_35mm);
       $("check").textContent = describe(latest, view);
       $("check").dataset.ok = latest.reasons.length ? "no" : "yes";
       $("check").dataset.ms = latest.ms.toFixed(1);
       $("check").dataset.phases = JSON.stringify(latest.phases);
+      $("check").dataset.source = latest.source;
       drawRing();
     }
     timer = setTimeout(loop, CHECK_EVERY_MS);

@@ -30,12 +30,14 @@ async function route() {
 async function status(inReach) {
   const list = await photos();
   const left = list.filter((p) => p.state !== "stored");
-  const changes = (await waiting()).length;
+  const changes = await waiting();
+  const conflicts = changes.filter((m) => m.state === "conflict").length;
   document.getElementById("link-status").textContent = inReach ? "gateway in reach" : "offline: kept on this phone";
   document.getElementById("link-status").dataset.online = inReach ? "yes" : "no";
   const parts = [];
   if (left.length) parts.push(`${left.length} photos waiting`);
-  if (changes) parts.push(`${changes} changes waiting`);
+  if (conflicts) parts.push(`${conflicts} to settle`);
+  if (changes.length > conflicts) parts.push(`${changes.length - conflicts} changes waiting`);
   document.getElementById("queue-status").innerHTML = parts.length
     ? `<a href="#/queue">${parts.join(", ")}</a>`
     : "nothing waiting";

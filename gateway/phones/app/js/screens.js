@@ -4,7 +4,7 @@ import { call, NotInReach, pair, session, signIn } from "./api.js";
 import { localIso, uuid7 } from "./ids.js";
 import { forget, mb, photos } from "./photos.js";
 import { get, kv, put, record, records } from "./store.js";
-import { change, settle, waiting } from "./sync.js";
+import { change, conflictFields, edit, settle, waiting } from "./sync.js";
 import { banner, formData, html, localInput, show, when } from "./view.js";
 
 const go = (hash) => {
@@ -191,8 +191,22 @@ export async function encounterScreen(encounterId) {
   const reportUrl = `/api/v1/encounters/${encounterId}/report.pdf`;
   const kept = await get("documents", reportUrl);
   const targets = wounds.length ? wounds : [{ id: "", data: { label: "the burn" } }];
+  const mechanism = await record("mechanism", encounterId);
+  const c = await choicesOf();
+  const cause = mechanism ? c.mechanisms.find((m) => m.value === mechanism.data.type)?.label : "";
   show(
     html`<h1>${name(patient)}</h1><p class="muted">Encounter ${when(encounter.data.time_of_arrival)}</p>
+      <h2>Injury</h2>
+      <p id="injury">${encounter.data.time_of_injury ? `Injured ${when(encounter.data.time_of_injury)}` : "Time of injury not recorded"} ·
+        ${cause ? `${cause}${mechanism.data.enclosed_space ? ", in an enclosed space" : ""}` : "mechanism not recorded"}
+        ${encounter.pending || mechanism?.pending ? html`<span class="muted">· waiting to send</span>` : ""}</p>
+      <details><summary>Record or change the injury</summary>
+      <form id="injury-form" class="stack">
+        <label>Time of injury <input name="time_of_injury" type="datetime-local" value="${encounter.data.time_of_injury ? localInput(new Date(encounter.data.time_of_injury)) : ""}"></label>
+        <label>Mechanism <select name="mechanism"><option value="">not recorded yet</option>${options(c.mechanisms, mechanism?.data.type)}</select></label>
+        <label class="check-row"><input name="enclosed_space" type="checkbox" ${mechanism?.data.enclosed_space ? "checked" : ""}> In an enclosed space</label>
+        <button type="submit">Save the injury</button>
+      </form></details>
       ${wounds.length ? "" : html`<p class="hint">Record the wound first on the <a href="#/patient/${encounter.data.patient_id}">patient</a> when the patient has several burns.</p>`}
       <h2>Photograph</h2>
       <ul class="list">${targets.map((w) => html`<li><a class="button" href="#/capture/${encounterId}/${w.id}">Photograph ${w.data.label}</a>
@@ -207,6 +221,27 @@ export async function encounterScreen(encounterId) {
         <span class="muted">(as made ${when(kept.fetched_at)})</span></p>` : ""}
       <p><button type="button" id="keep-report">${kept ? "Fetch the report again" : "Keep the report on this phone"}</button></p>`,
     {
+      "#injury-form": {
+        submit: async (event) => {
+          event.preventDefault();
+          const f = formData(event.target);
+          const injured = iso(f.time_of_injury);
+          // the records as they are now (a round may have brought the gateway's fuller version since the screen showed)
+          const [nowEncounter, nowMechanism] = [await record("encounter", encounterId), await record("mechanism", encounterId)];
+          if ((injured || null) !== (nowEncounter.data.time_of_injury || null)) {
+            const data = { ...nowEncounter.data };
+            if (injured) data.time_of_injury = injured;
+            else delete data.time_of_injury;
+            await edit("encounter", encounterId, data);
+          }
+          const enclosed = Boolean(f.enclosed_space);
+          if (f.mechanism && (f.mechanism !== nowMechanism?.data.type || enclosed !== Boolean(nowMechanism?.data.enclosed_space))) {
+            const data = { ...(nowMechanism?.data || { encounter_id: encounterId }), type: f.mechanism, enclosed_space: enclosed };
+            await edit("mechanism", encounterId, data);
+          }
+          encounterScreen(encounterId);
+        },
+      },
       "#keep-report": {
         click: async () => {
           try {
@@ -259,15 +294,34 @@ function photoList(list) {
   })}</ul>`;
 }
 
+const human = (field) => field.replaceAll("_", " ");
+const shown = (value) =>
+  value == null || value === "" ? "not set" : value === true ? "yes" : value === false ? "no" : typeof value === "object" ? JSON.stringify(value) : String(value);
+
+// A change the gateway refused because someone saved that record first: who and when, each field both changed
+// (the gateway's value beside the phone's), what only the gateway changed, and the nurse's choice.
+function conflictItem(m) {
+  const theirs = m.current?.data || {};
+  const { both, gatewayOnly } = conflictFields(m);
+  const by = m.current ? `${m.current.meta.updated_by}, ${when(m.current.meta.updated_at)}` : "someone else";
+  return html`<li class="conflict" data-conflict="${m.seq}"><p><strong>The ${human(m.kind)} was changed at the gateway
+      too</strong> <span class="muted">(by ${by})</span></p>
+    <table><thead><tr><th></th><th>Gateway</th><th>This phone</th></tr></thead>
+      <tbody>${both.map((k) => html`<tr><th>${human(k)}</th><td>${shown(theirs[k])}</td><td>${shown(m.data?.[k])}</td></tr>`)}</tbody></table>
+    ${gatewayOnly.length ? html`<p class="muted">Changed only at the gateway, kept either way:
+      ${gatewayOnly.map((k) => `${human(k)} ${shown(theirs[k])}`).join(", ")}.</p>` : ""}
+    <button type="button" data-keep-theirs="${m.seq}">Use the gateway's</button>
+    <button type="button" data-keep-mine="${m.seq}">Keep mine</button></li>`;
+}
+
 export async function queueScreen() {
   const list = await photos();
   const changes = await waiting();
   show(
     html`<h1>Waiting on this phone</h1>
       <h2>Changes</h2>
-      <ul class="list">${changes.map((m) => html`<li>${m.op} ${m.kind} <span class="muted">${m.state}${m.error ? `: ${m.error}` : ""}</span>
-        ${m.state === "conflict" ? html`<button type="button" data-keep-theirs="${m.seq}">Use the gateway's</button>
-        <button type="button" data-keep-mine="${m.seq}">Keep mine</button>` : ""}</li>`)}</ul>
+      <ul class="list">${changes.map((m) => (m.state === "conflict" ? conflictItem(m) : html`<li>${m.op} ${m.kind}
+        <span class="muted">${m.state}${m.error ? `: ${m.error}` : ""}</span></li>`))}</ul>
       <h2>Photos</h2>${photoList(list)}
       ${list.some((p) => p.state === "refused") ? html`<p><button type="button" id="forget-refused">Remove the refused photos</button></p>` : ""}`,
     {

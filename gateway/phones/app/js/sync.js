@@ -10,6 +10,7 @@ export const PATIENT_BOUND = 300;
 // encounters, wounds, mechanism, analyses and advice; older ones are read from the gateway when in reach.
 
 export async function change(kind, id, op, data, baseVersion = null, reason = null) {
+  const known = await record(kind, id);
   const mutation = {
     mutation_id: uuid7(),
     kind,
@@ -20,12 +21,29 @@ export async function change(kind, id, op, data, baseVersion = null, reason = nu
     reason,
     client_time: localIso(),
     state: "queued",
+    base_data: op === "update" ? (known?.data ?? null) : null, // what the phone edited: its own changes are the difference
   };
   await put("mutations", mutation);
-  const known = await record(kind, id);
   await keepRecord(kind, id, data, known ? known.meta : null, true);
   window.dispatchEvent(new Event("burnedge-change")); // the round sends it now if the gateway is in reach
   return mutation;
+}
+
+// A change to a record: a change still waiting for that record takes the new data (nothing was sent yet, so there
+// is nothing to conflict with); otherwise an update on top of the version the phone holds, or a create.
+export async function edit(kind, id, data) {
+  const queued = (await waiting()).filter((m) => m.kind === kind && m.id === id && m.state === "queued" && m.op !== "delete");
+  if (queued.length) {
+    const last = queued[queued.length - 1];
+    await put("mutations", { ...last, data, client_time: localIso() });
+    const known = await record(kind, id);
+    await keepRecord(kind, id, data, known ? known.meta : null, true);
+    window.dispatchEvent(new Event("burnedge-change"));
+    return last;
+  }
+  const known = await record(kind, id);
+  const version = known?.meta?.version;
+  return version ? change(kind, id, "update", data, version) : change(kind, id, "create", data);
 }
 
 export async function waiting() {
@@ -61,8 +79,25 @@ export async function push() {
   return answer;
 }
 
-// A conflict is settled by the nurse: take the gateway's version (drop the phone's change) or keep the phone's,
-// pushed again on top of the gateway's version.
+const same = (a, b) => JSON.stringify(a ?? null) === JSON.stringify(b ?? null);
+
+// What a conflict is made of: the fields the phone changed from the version it edited, those of them the gateway
+// holds differently, and the fields only the gateway changed (kept whichever the nurse chooses).
+export function conflictFields(m) {
+  const theirs = m.current?.data || {};
+  const mine = m.data || {};
+  const base = m.base_data;
+  const keys = [...new Set([...Object.keys(theirs), ...Object.keys(mine), ...Object.keys(base || {})])];
+  const changedHere = base ? keys.filter((k) => !same(mine[k], base[k])) : keys.filter((k) => k in mine);
+  return {
+    both: changedHere.filter((k) => !same(mine[k], theirs[k])),
+    gatewayOnly: base ? keys.filter((k) => !changedHere.includes(k) && !same(theirs[k], base[k])) : [],
+    changedHere,
+  };
+}
+
+// A conflict is settled by the nurse: take the gateway's version (drop the phone's change), or keep the phone's
+// changes, put on top of the gateway's version (what only the gateway changed stays) and pushed again.
 export async function settle(seq, keepMine) {
   const m = (await waiting()).find((x) => x.seq === seq);
   if (!m) return;
@@ -71,7 +106,15 @@ export async function settle(seq, keepMine) {
     if (m.current) await keepRecord(m.kind, m.id, m.current.data, m.current.meta, false);
     return;
   }
-  await put("mutations", { ...m, state: "queued", base_version: m.current.meta.version, current: null, error: "" });
+  const data = { ...m.current.data };
+  for (const k of conflictFields(m).changedHere) {
+    if (k in m.data) data[k] = m.data[k];
+    else delete data[k];
+  }
+  const base = { base_version: m.current.meta.version, base_data: m.current.data };
+  await put("mutations", { ...m, ...base, data, state: "queued", current: null, error: "" });
+  await keepRecord(m.kind, m.id, data, m.current.meta, true);
+  window.dispatchEvent(new Event("burnedge-change")); // sent again now if the gateway is in reach
 }
 
 export async function pull() {
@@ -102,6 +145,7 @@ async function prune() {
   const gone = new Set(encounters.map((e) => e.id));
   const photos = await all("photos");
   for (const photo of photos) gone.delete(photo.encounter_id); // a photo's encounter stays while the photo waits
+  for (const e of encounters) if (!gone.has(e.id)) dropped.delete(e.data.patient_id); // and so does its patient
   for (const kind of ["burn_analysis", "consultation", "mechanism"]) {
     for (const r of await records(kind)) {
       if (gone.has(r.data.encounter_id || r.id)) await remove("records", recordKey(kind, r.id));
