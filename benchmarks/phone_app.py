@@ -107,7 +107,10 @@ def checks(page, samples: int) -> dict:
                 values.append(float(ms))
                 phases.append(json.loads(parts))
             page.wait_for_timeout(400 * rate)
-        out[rate] = (values, {k: statistics.median(p[k] for p in phases) for k in phases[0]})
+        out[rate] = (
+            values,
+            {k: (statistics.median(p[k] for p in phases), p95([p[k] for p in phases])) for k in phases[0]},
+        )
     cdp.send("Emulation.setCPUThrottlingRate", {"rate": 1})
     return out
 
@@ -199,7 +202,7 @@ def main() -> None:
                 page.get_by_role("button", name="Start encounter").click()
                 page.get_by_role("link", name="Photograph the burn").click()
                 poll(page, "document.getElementById('check')?.dataset.ms !== undefined", 60)
-                check = checks(page, 20)
+                check = checks(page, 30)
                 agreement = verdicts(page, args.shots)
                 queued = queue(page, folder, args.photos)
                 browser.close()
@@ -213,7 +216,7 @@ def main() -> None:
     for label, times in start.items():
         print(f"start {label}: median {statistics.median(times):.2f} s, max {max(times):.2f} s (runs {len(times)})")
     for rate, (values, parts) in check.items():
-        split = ", ".join(f"{k} {v:.1f}" for k, v in parts.items())
+        split = ", ".join(f"{k} {median:.1f} (p95 {high:.1f})" for k, (median, high) in parts.items())
         print(f"check at {rate}x CPU: median {statistics.median(values):.1f} ms, p95 {p95(values):.1f} ms ({split})")
     print(
         f"verdicts: {agreement['photos']} photos; phone and gateway agree on accepting {agreement['accepted_agree']}, "

@@ -85,12 +85,12 @@ def phone_photos(page) -> list[dict]:
 def fake_camera(folder: Path) -> Path:
     """An MJPEG file of a rendered burn phantom seen from around it (8 views, half a second each), for Chromium's
     fake camera (--use-file-for-fake-video-capture)."""
-    from processing.phantom.generate import run as render_phantom  # native libraries: only where used
+    from harness.phantoms import rendered
     from schemas.phantom import PhantomShape, PhantomSpec
 
     phantom = folder / "phantom"
     spec = PhantomSpec(shape=PhantomShape.patch, seed=12, area_cm2=16.0, depth_mm=2.5, views=8, width=960, height=720)
-    render_phantom(spec, phantom)
+    rendered(spec, phantom)
     frames = sorted((phantom / "images").glob("*.jpg"))
     video = folder / "orbit.mjpeg"
     video.write_bytes(b"".join(f.read_bytes() for f in frames for _ in range(15)))

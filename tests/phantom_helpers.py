@@ -14,11 +14,10 @@ SMALL = {"views": 8, "width": 960, "height": 720}
 
 def render_small_patch(out: Path) -> Path:
     """The phantom the analysis tests share: a patch with a 16 cm2, 2.5 mm deep burn, SMALL views."""
-    from processing.phantom.generate import run as render_phantom  # native libraries: only where used
+    from harness.phantoms import rendered
     from schemas.phantom import PhantomShape, PhantomSpec
 
-    render_phantom(PhantomSpec(shape=PhantomShape.patch, seed=12, area_cm2=16.0, depth_mm=2.5, **SMALL), out)
-    return out
+    return rendered(PhantomSpec(shape=PhantomShape.patch, seed=12, area_cm2=16.0, depth_mm=2.5, **SMALL), out)
 
 
 def hide_marker(phantom: Path, images: Path) -> None:

@@ -24,12 +24,12 @@ AREA_TOLERANCE = 0.05
 
 
 def render(out: Path, shape: str, seed: int, area_cm2: float, depth_mm: float) -> Path:
-    from processing.phantom.generate import run as render_phantom
+    from harness.phantoms import rendered
     from schemas.phantom import PhantomShape, PhantomSpec
 
-    spec = PhantomSpec(shape=PhantomShape(shape), seed=seed, area_cm2=area_cm2, depth_mm=depth_mm, **SMALL)
-    render_phantom(spec, out)
-    return out
+    return rendered(
+        PhantomSpec(shape=PhantomShape(shape), seed=seed, area_cm2=area_cm2, depth_mm=depth_mm, **SMALL), out
+    )
 
 
 @pytest.fixture(scope="module")

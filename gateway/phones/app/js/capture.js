@@ -10,7 +10,9 @@ import { keepPhoto, photos, room } from "./photos.js";
 import { kv, record } from "./store.js";
 import { banner, html, show } from "./view.js";
 
-const CHECK_EVERY_MS = 300;
+const CHECK_EVERY_MS = 100;
+/* Each new preview frame is checked, up to ten a second: a hand moves little in a tenth of a second, and checking
+   every one of 30 frames a second would only drain the battery and slow the page. */
 let stream = null;
 let timer = null;
 
@@ -106,11 +108,13 @@ export async function captureScreen(encounterId, woundId, onQueued) {
     return noCamera(error.message);
   }
   $("shutter").disabled = false;
+  const mine = stream; // a loop of an earlier capture screen stops when its camera has gone
   const loop = async () => {
-    if (!stream) return;
+    if (stream !== mine) return;
+    const started = performance.now();
     if (settings && video.videoWidth) {
       latest = await check(video, video.videoWidth, video.videoHeight, settings, canvas);
-      if (!stream) return;
+      if (stream !== mine) return;
       const marker = latest.figures.markers[0];
       view = pose(marker, video.videoWidth, video.videoHeight, settings.marker.side_mm, settings.readiness.default_focal_35mm);
       $("check").textContent = describe(latest, view);
@@ -120,7 +124,8 @@ export async function captureScreen(encounterId, woundId, onQueued) {
       $("check").dataset.source = latest.source;
       drawRing();
     }
-    timer = setTimeout(loop, CHECK_EVERY_MS);
+    const onNewFrame = () => (video.requestVideoFrameCallback ? video.requestVideoFrameCallback(() => loop()) : loop());
+    timer = setTimeout(onNewFrame, Math.max(0, CHECK_EVERY_MS - (performance.now() - started)));
   };
   loop();
   const take = async (verdict, where) => {

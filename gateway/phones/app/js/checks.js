@@ -83,8 +83,8 @@ function centralSharpness(gray, stride, w, h) {
 }
 
 // js-aruco2's Detector.detect, from grey levels we already have (it would make them again from RGBA) and with typed
-// buffers (its own are growing arrays); minSize from the whole frame's width, so a crop finds what the frame would.
-function detectIn(found, gray, w, h, frameWidth) {
+// buffers (its own are growing arrays); outlines shorter than `minPerimeter` are not looked at.
+function detectIn(found, gray, w, h, minPerimeter) {
   const CV = window.CV;
   if (found.thres.data.length !== w * h) {
     found.thres = new CV.Image(w, h, new Uint8Array(w * h));
@@ -92,19 +92,21 @@ function detectIn(found, gray, w, h, frameWidth) {
   }
   const grey = new CV.Image(w, h, gray);
   CV.adaptiveThreshold(grey, found.thres, 2, 7);
-  let candidates = found.findCandidates(CV.findContours(found.thres, found.binary), frameWidth * 0.01, 0.05, 10);
+  let candidates = found.findCandidates(CV.findContours(found.thres, found.binary), minPerimeter, 0.05, 10);
   candidates = found.notTooNear(found.clockwiseCorners(candidates), 10);
   return found.findMarkers(grey, candidates, 49);
 }
 
 // The markers in view, their corners and side at full resolution. The search runs on a half-size copy (of a frame
 // at least MARKER_HALF_FROM long): around the last marker when there was one, else (or when it has gone from
-// there) over the whole frame.
-export function findMarkers(frame, marker) {
+// there) over the whole frame. A marker under half the gateway's smallest side (`minSidePx`, full resolution) is
+// not looked for: its outline is one of thousands the skin's texture makes, and it would be too small anyway.
+export function findMarkers(frame, marker, minSidePx = 0) {
   const found = markerDetector(marker);
   if (!found) return [];
   const small = Math.max(frame.w, frame.h) >= MARKER_HALF_FROM ? halfSize(frame.gray, frame.stride, frame.w, frame.h) : frame;
   const k = small.w / frame.w;
+  const minPerimeter = Math.max(small.w * 0.01, 4 * (minSidePx / 2) * frame.scale * k);
   const rowLength = small.stride || small.w;
   const search = (x0, y0, w, h) => {
     let gray = small.gray;
@@ -112,7 +114,7 @@ export function findMarkers(frame, marker) {
       gray = new Uint8Array(w * h);
       for (let y = 0; y < h; y += 1) gray.set(small.gray.subarray((y0 + y) * rowLength + x0, (y0 + y) * rowLength + x0 + w), y * w);
     }
-    return detectIn(found, gray, w, h, small.w).map((m) => ({
+    return detectIn(found, gray, w, h, minPerimeter).map((m) => ({
       id: m.id,
       corners: m.corners.map((p) => ({ x: (x0 + p.x) / k, y: (y0 + p.y) / k })),
     }));
@@ -160,7 +162,7 @@ export async function check(source, width, height, settings, canvas) {
   const t1 = performance.now();
   const f = figures(frame, settings.quality);
   const t2 = performance.now();
-  const markers = findMarkers(frame, settings.marker);
+  const markers = findMarkers(frame, settings.marker, settings.quality.min_marker_side_px);
   const t3 = performance.now();
   const reasons = judge(f, markers, width, height, settings.quality);
   return {
