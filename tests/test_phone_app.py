@@ -82,7 +82,8 @@ def test_a_nurse_pairs_captures_offline_and_nothing_is_lost(gateway, phone_brows
         encounter_id = page.url.rsplit("/", 1)[-1]
         page.goto(page.url.replace(f"#/encounter/{encounter_id}", ""))  # back to the patient through the list
         page.get_by_role("link", name="Ana Offline").click()
-        page.get_by_label("Name").fill("left forearm")
+        page.get_by_role("heading", name="Ana Offline").wait_for()  # the patient screen, not the list's form
+        page.get_by_label("Name", exact=True).fill("left forearm")
         page.get_by_label("Regions").select_option(["lower_arm_left_anterior"])
         page.get_by_role("button", name="Add wound").click()
         page.get_by_text("left forearm").first.wait_for()
