@@ -178,6 +178,11 @@ def test_the_clinicians_flow_end_to_end_and_the_consultants_advice_back(sites, b
     page.wait_for_selector("#result", timeout=ANALYSIS_TIMEOUT_MS)
     assert "geometry, not burn depth" in page.inner_text("#metrics")
     assert "cm²" in page.inner_text("#metrics")
+    lead = page.inner_text("#result-summary")  # the figures and how far to trust them, first, in a sentence
+    assert re.search(r"Burn area \d+\.\d cm² on the 3D surface, perimeter \d+\.\d cm", lead), lead
+    assert re.search(r"Confidence (high|moderate|low): .+\. Scale from the printed marker", lead), lead
+    assert "ITA" not in page.inner_text("main")  # the indicators are one click away
+    page.locator("#result-details summary").click()
     version = BurnSegmenter(SHIPPED_MODEL).metadata["version"]
     assert f"model {version}" in page.inner_text("main")  # which model outlined the burn, with its card
     shot(page, "07-analysis-result-loading")
