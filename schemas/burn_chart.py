@@ -61,6 +61,33 @@ class LundBrowderRegion(enum.StrEnum):
     foot_left_plantar = "foot_left_plantar"
 
 
+_PARTS = {"upper_arm": "upper arm", "lower_arm": "forearm", "lower_leg": "lower leg"}
+_FACES = {"anterior": "front", "posterior": "back", "palmar": "palm", "dorsal": "back"}
+_R = LundBrowderRegion
+_SINGLE = {_R.head_anterior: "Head, front", _R.head_posterior: "Head, back", _R.neck_anterior: "Neck, front"}
+_SINGLE |= {_R.neck_posterior: "Neck, back", _R.trunk_anterior: "Trunk, front", _R.trunk_posterior: "Trunk, back"}
+_SINGLE |= {_R.genitalia: "Genitalia", _R.buttock_right: "Right buttock", _R.buttock_left: "Left buttock"}
+
+
+def _region_name(region: LundBrowderRegion) -> str:
+    if region in _SINGLE:
+        return _SINGLE[region]
+    part, side, face = region.value.rsplit("_", 2)
+    if part == "foot":
+        return f"{side.capitalize()} foot, {'top' if face == 'dorsal' else 'sole'}"
+    return f"{side.capitalize()} {_PARTS.get(part, part)}, {_FACES[face]}"
+
+
+REGION_NAMES: dict[LundBrowderRegion, str] = {region: _region_name(region) for region in LundBrowderRegion}
+"""Region -> its name for a reader, e.g. "Right thigh, front", "Left hand, palm", "Right foot, sole": what pages,
+the PDF and the center show (the codes are for machines)."""
+
+
+def region_name(region: LundBrowderRegion | str) -> str:
+    """A region's name for a reader, from the region or its code."""
+    return REGION_NAMES[LundBrowderRegion(region)]
+
+
 class SpecialArea(enum.StrEnum):
     """Functionally or cosmetically critical areas named by the referral criteria."""
 

@@ -137,13 +137,19 @@ def pytest_runtest_setup(item) -> None:
 
 
 @pytest.fixture(scope="module")
-def browser():
-    """Headless Chromium for a module's page tests (harness/browser.py)."""
+def playwright():
+    """Playwright for a module's page tests: one per module (a second one in the same process fails)."""
     from playwright.sync_api import sync_playwright
 
+    with sync_playwright() as running:
+        yield running
+
+
+@pytest.fixture(scope="module")
+def browser(playwright):
+    """Headless Chromium for a module's page tests (harness/browser.py)."""
     from harness.browser import launch
 
-    with sync_playwright() as playwright:
-        browser = launch(playwright)
-        yield browser
-        browser.close()
+    browser = launch(playwright)
+    yield browser
+    browser.close()

@@ -12,7 +12,9 @@ import time
 
 import pytest
 
+from gateway.pages.encounter_view import FORM_PAGES
 from harness.browser import DESKTOP, PHONE, TABLET, browser_missing, distinct_colours, shot
+from harness.plain_words import internal_codes
 from harness.processes import PASSWORD
 from harness.sites import Sites, cli
 from processing.segmentation.infer import SHIPPED_MODEL, BurnSegmenter
@@ -176,6 +178,11 @@ def test_the_clinicians_flow_end_to_end_and_the_consultants_advice_back(sites, b
     page.wait_for_selector("#result", timeout=ANALYSIS_TIMEOUT_MS)
     assert "geometry, not burn depth" in page.inner_text("#metrics")
     assert "cm²" in page.inner_text("#metrics")
+    lead = page.inner_text("#result-summary")  # the figures and how far to trust them, first, in a sentence
+    assert re.search(r"Burn area \d+\.\d cm² on the 3D surface, perimeter \d+\.\d cm", lead), lead
+    assert re.search(r"Confidence (high|moderate|low): .+\. Scale from the printed marker", lead), lead
+    assert "ITA" not in page.inner_text("main")  # the indicators are one click away
+    page.locator("#result-details summary").click()
     version = BurnSegmenter(SHIPPED_MODEL).metadata["version"]
     assert f"model {version}" in page.inner_text("main")  # which model outlined the burn, with its card
     shot(page, "07-analysis-result-loading")
@@ -223,6 +230,7 @@ def test_the_clinicians_flow_end_to_end_and_the_consultants_advice_back(sites, b
     text = pdf_text(pdf)
     assert "Diallo" in text and "7.1" in text
     assert f"segmentation model {version}" in " ".join(text.split())  # the model section names the model
+    assert internal_codes(text) == [], "the report shows codes instead of clinical words"
 
     page.goto(encounter_url)
     page.get_by_role("button", name="Send to the burn center").click()
@@ -245,6 +253,7 @@ def test_the_clinicians_flow_end_to_end_and_the_consultants_advice_back(sites, b
     consultant.get_by_role("link", name=re.compile("emergency")).first.click()
     consultant.wait_for_load_state()
     expect(consultant.locator("#tbsa-figure .value")).to_have_text("7.1 %")
+    assert internal_codes(consultant.inner_text("body")) == [], "the center's case shows codes"
     assert "geometry, not burn depth" in consultant.inner_text("#metrics")
     report_href = consultant.get_by_role("link", name=re.compile("report")).get_attribute("href")
     report = center.request.get(sites.center.url + report_href)
@@ -295,14 +304,17 @@ def test_the_clinicians_flow_end_to_end_and_the_consultants_advice_back(sites, b
     shot(page, "15-advice-at-the-clinic")
     center.close()
 
-    # Phone and tablet: every page fits the screen's width (no sideways scrolling).
+    # Phone and tablet: every page fits the screen's width (no sideways scrolling) and speaks clinical words.
     pages = {"encounter": "", "burn-chart": "/burn-chart?region=trunk_anterior", "pictures": "/pictures"}
-    pages |= {"analyses": "/analyses", "fluids": "/parts/fluids"}
+    pages |= {"analyses": "/analyses"} | {slug: f"/parts/{slug}" for slug in FORM_PAGES}
+    page.goto(patient_url)
+    assert internal_codes(page.inner_text("body")) == [], "the patient page shows codes"
     for width, height in (PHONE, TABLET):
         page.set_viewport_size({"width": width, "height": height})
         for name, suffix in pages.items():
             page.goto(encounter_url + suffix)
             shot(page, f"11-{name}-{width}")
+            assert internal_codes(page.inner_text("body")) == [], f"{name} shows codes instead of clinical words"
             overflow = page.evaluate("document.documentElement.scrollWidth - window.innerWidth")
             assert overflow <= 0, f"{name} is {overflow} px wider than a {width} px screen"
     page.set_viewport_size({"width": DESKTOP[0], "height": DESKTOP[1]})

@@ -161,7 +161,7 @@ def test_no_chart_leaves_size_criteria_undetermined():
         assert code in r.current.undetermined
     assert "aba2006.partial_gt_10" in r.older.undetermined
     assert r.current.recommendation.startswith("No ABA referral criterion met on the recorded data")
-    assert "aba2022.full_thickness" in r.current.recommendation
+    assert "Thermal: full-thickness burns" in r.current.recommendation and "aba2022." not in r.current.recommendation
 
 
 def test_chart_without_age_decides_depth_but_not_size():
@@ -205,7 +205,8 @@ def test_deep_partial_special_area_is_potentially_deep():
 def test_consultation_names_open_immediate_criteria():
     r = assess_referral(inputs((R.lower_arm_left_anterior, 0.5, D.superficial_partial), pain=None))
     assert r.current.met == ["aba2022.partial_lt_10"]
-    assert r.current.recommendation == f"{CONSULT}; not assessable from the record: aba2022.pain"
+    assert r.current.recommendation == f"{CONSULT}; not assessable from the record: Thermal: poorly controlled pain"
+    assert r.current.undetermined == ["aba2022.pain"]  # the codes are for machines, the recommendation for people
 
 
 def test_current_table_matches_the_published_two_tiers():

@@ -193,7 +193,7 @@ def test_poorly_controlled_pain():
     assert pain.reason == "record whether pain is controlled"
     assert unknown.current.undetermined == ["aba2022.pain"]
     assert unknown.current.recommendation == (
-        "No ABA referral criterion met on the recorded data; not assessable from the record: aba2022.pain"
+        "No ABA referral criterion met on the recorded data; not assessable from the record: Thermal: poorly controlled pain"
     )
     no_survey = criterion(assess_referral(inputs(*entries, with_primary=False)).current, "aba2022.pain")
     assert no_survey.met is None

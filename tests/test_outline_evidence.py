@@ -214,3 +214,10 @@ def test_the_evidence_takes_the_median_of_the_models_views_and_the_groups_held_o
     assert e.group_dice_ci95 == [0.7, 0.83] and e.pass_disagreement == 0.2 and e.uncertain_band_px == 2.0
     people_only = SegmentationRecord(views=[view(0, MaskSource.clinician_outline)])
     assert outline_evidence.gather(people_only, 0.9) is None
+
+
+def test_an_outline_cut_at_the_edge_of_a_view_is_never_high_confidence_and_says_why():
+    good = confidence.score(**GOOD_CAPTURE, outline=evidence())
+    cut = confidence.score(**GOOD_CAPTURE, outline=evidence(), outline_cut_views=2)
+    assert good.level == "high" and cut.level != "high" and cut.score < good.score
+    assert any("reaches the edge of what it looked at in 2 photo(s)" in r for r in cut.reasons)

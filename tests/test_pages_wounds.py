@@ -45,7 +45,7 @@ def test_wounds_are_recorded_on_the_patient_page_and_picked_for_pictures_and_ana
     assert where.endswith(f"#wound-{arm}")
     thigh, _ = _record_wound(nurse, patient_id, label="right thigh", regions="thigh_right_anterior", side="")
     page = nurse.get(f"/patients/{patient_id}").text
-    assert "Wounds (2)" in page and "left forearm" in page and "lower arm left anterior, hand left dorsal" in page
+    assert "Wounds (2)" in page and "left forearm" in page and "Left forearm, front; Left hand, back" in page
 
     # A wound with no region is refused with the reason, and nothing is stored.
     _, where = _record_wound(nurse, patient_id, label="somewhere")

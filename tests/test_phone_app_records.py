@@ -12,7 +12,7 @@ import httpx
 import pytest
 
 from gateway.phones.app_routes import APP_DIR
-from harness.browser import CHROMIUM, CHROMIUM_ARGS, browser_missing, shot
+from harness.browser import browser_missing, shot
 from harness.phone_app import (
     PHONE_PHOTOS,
     gateway_with_staff,
@@ -35,21 +35,6 @@ PHONE_RECORDS = """async (kind) => {
   db.close();
   return all.filter((r) => r.kind === kind).map((r) => r.id);
 }"""
-
-
-@pytest.fixture(scope="module")
-def playwright():
-    from playwright.sync_api import sync_playwright
-
-    with sync_playwright() as running:
-        yield running
-
-
-@pytest.fixture(scope="module")
-def browser(playwright):
-    browser = playwright.chromium.launch(executable_path=str(CHROMIUM), headless=True, args=CHROMIUM_ARGS)
-    yield browser
-    browser.close()
 
 
 @pytest.fixture

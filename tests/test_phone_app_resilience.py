@@ -39,21 +39,6 @@ def gateway(tmp_path):
     process.stop()
 
 
-@pytest.fixture(scope="module")
-def playwright():
-    from playwright.sync_api import sync_playwright
-
-    with sync_playwright() as running:
-        yield running
-
-
-@pytest.fixture(scope="module")
-def browser(playwright):
-    browser = playwright.chromium.launch(executable_path=str(CHROMIUM), headless=True, args=CHROMIUM_ARGS)
-    yield browser
-    browser.close()
-
-
 def _photos(folder: Path, count: int) -> list[Path]:
     """Phone-sized photos of noise (about 4 MB each: noise does not compress)."""
     return [noise_photo(folder / f"photo-{i}.jpg", i, size=(1600, 1200), quality=97) for i in range(count)]

@@ -15,6 +15,7 @@ from base.web.pages.forms import FormBody
 from base.web.pages.rendering import page
 from base.web.paths import IdPath
 from base.web.site import AuthedRequest
+from gateway.analyses.summary import summary
 from gateway.capture.picture_pages import grouped
 from gateway.dependencies import ServicesDep
 from gateway.pages.common import posted_text
@@ -108,11 +109,13 @@ class AnalysisPages(Controller):
     def analysis(self, job_id: IdPath, request: AuthedRequest, services: ServicesDep) -> Template:
         job = services.analyses.get(request.user, job_id)
         encounter, patient = encounter_header(services, request.user, job.encounter_id)
-        result, problem, artifacts = None, None, []
+        result, problem, artifacts, lead = None, None, [], None
         if job.state in FINISHED:
             try:
                 result = services.analyses.result(request.user, job_id)
                 artifacts = services.analyses.artifacts(request.user, job_id)
+                track = services.wounds.healing(request.user, job.wound_id).track if job.wound_id else None
+                lead = summary(result, track, job_id)
             except BurnedgeError as exc:
                 problem = exc.detail
         base = f"/api/v1/analyses/{job_id}/artifacts/"
@@ -125,6 +128,7 @@ class AnalysisPages(Controller):
             job=job,
             finished=job.state in FINISHED,
             result=result,
+            lead=lead,
             problem=problem,
             surface=base + PAINTED_SURFACE if PAINTED_SURFACE in artifacts else None,
             overlays=[base + name for name in artifacts if name.startswith("segmentation/overlays/")],

@@ -44,6 +44,7 @@ def score(
     clinician_masks: int,
     *,
     cut_off: bool = False,
+    outline_cut_views: int = 0,
     min_views: int = 3,
     outline: OutlineEvidence | None = None,
 ) -> ConfidenceRecord:
@@ -55,6 +56,7 @@ def score(
         "views": B_VIEWS * min(views_seeing_burn, 10) / 10,
         "scale": B_SCALE * unc if unc is not None else -UNSCALED_PENALTY - B_SCALE * 0.3,
         "cut_off": -CUT_OFF_PENALTY if cut_off else 0.0,
+        "outline_cut": -CUT_OFF_PENALTY if outline_cut_views else 0.0,
     }
     outline_terms, outline_reasons = outline_evidence.terms(outline) if outline else ({}, [])
     c = 1.0 / (1.0 + math.exp(-(B0 + sum(terms.values()) + sum(outline_terms.values()))))
@@ -79,8 +81,15 @@ def score(
             "the burn reaches the edge of the reconstructed surface: part of it may be missing; "
             "take photos that show healthy skin all around it"
         )
+    if outline_cut_views:
+        reasons.append(
+            f"the model's outline reaches the edge of what it looked at in {outline_cut_views} photo(s): "
+            "the burn may be larger than measured"
+        )
     reasons += outline_reasons
     level = "high" if c >= 0.8 else "moderate" if c >= 0.5 else "low"
+    if level == "high" and (cut_off or outline_cut_views or outline_reasons):
+        level = "moderate"  # never "high" beside an open doubt about the outline the figures come from
     if level != "high" and not reasons:
         # No single indicator is poor, but together they are: name the weakest against a good capture.
         good = {

@@ -211,6 +211,7 @@ def _result(
         scale_uncertainty_percent=unc if scaled else None,
         clinician_masks=sum(m.source is not MaskSource.model for m in masks),
         cut_off=measured.open_edges > 0 or measured.burn_at_surface_edge,
+        outline_cut_views=len(cut_views),
         min_views=config.analysis.min_views_for_confidence,
         outline=outline_evidence.gather(segmentation, measured.view_agreement),
     )

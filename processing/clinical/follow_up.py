@@ -8,6 +8,7 @@ from __future__ import annotations
 import datetime as dt
 
 from processing.clinical.decision_inputs import DecisionInputs
+from processing.clinical.referral_rules import NOT_ASSESSABLE
 from processing.clinical.sources import ABA_REFERRAL, BBA_NOT_HEALED, DEITCH, KANTOR_MARGOLIS, VICBURNS_DEPTH
 from schemas.clinical_results import ReferralTier
 from schemas.decision_support import InputUsed, Recommendation, RecommendationCategory
@@ -26,7 +27,7 @@ def referral(inputs: DecisionInputs) -> tuple[list[Recommendation], list[str]]:
     used = [assessment.used("referral criteria met", ", ".join(current.met) or "none")]
     if current.undetermined:
         used.append(assessment.used("referral criteria undetermined", ", ".join(current.undetermined)))
-    head = current.recommendation.split("; not assessable")[0]
+    head = current.recommendation.split(NOT_ASSESSABLE)[0]
     text = f"Referral ({current.guideline}): {head}."
     details = [f"{c.text}: {c.reason}" for c in met]
     open_criteria = [c.text for c in current.criteria if c.met is None]

@@ -10,6 +10,7 @@ from processing.clinical.referral_rules import (
     GUIDELINE,
     NO_INTAKE,
     NOT_SUPERFICIAL,
+    NOTHING_JUDGED,
     REFER,
     ReferralInputs,
     Rule,
@@ -152,9 +153,13 @@ def older_guideline(inp: ReferralInputs) -> GuidelineResult:
     criteria = judge_rules(OLDER, inp)
     met = [c.code for c in criteria if c.met]
     undetermined = [c.code for c in criteria if c.met is None]
-    recommendation = (
-        "Refer to a burn center" if met else unassessed("No criterion met on the recorded data", undetermined)
-    )
+    open_all = [c for c in criteria if c.met is None]
+    if met:
+        recommendation = "Refer to a burn center"
+    elif len(open_all) == len(criteria):
+        recommendation = unassessed(NOTHING_JUDGED, open_all)
+    else:
+        recommendation = unassessed("No criterion met on the recorded data", open_all)
     return GuidelineResult(
         guideline=GUIDELINE,
         version=OLDER_VERSION,

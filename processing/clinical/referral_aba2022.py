@@ -33,6 +33,7 @@ from processing.clinical.referral_rules import (
     IMMEDIATE,
     NO_CHART,
     NO_INTAKE,
+    NOTHING_JUDGED,
     ReferralInputs,
     Rule,
     Verdict,
@@ -209,11 +210,14 @@ def current_guideline(inp: ReferralInputs) -> GuidelineResult:
         recommendation = "Immediate consultation with consideration for transfer"
     else:
         # Undetermined immediate criteria could still raise the tier: say which.
-        open_immediate = [c.code for c in criteria if c.met is None and c.tier is IMMEDIATE]
+        open_immediate = [c for c in criteria if c.met is None and c.tier is IMMEDIATE]
+        open_all = [c for c in criteria if c.met is None]
         if met:
             recommendation = unassessed("Consultation recommended", open_immediate)
+        elif len(open_all) == len(criteria):
+            recommendation = unassessed(NOTHING_JUDGED, open_all)
         else:
-            recommendation = unassessed("No ABA referral criterion met on the recorded data", undetermined)
+            recommendation = unassessed("No ABA referral criterion met on the recorded data", open_all)
     return GuidelineResult(
         guideline=GUIDELINE,
         version=CURRENT_VERSION,

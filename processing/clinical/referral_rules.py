@@ -268,7 +268,13 @@ def judge_rules(rules: tuple[Rule, ...], inp: ReferralInputs) -> list[CriterionR
     return results
 
 
-def unassessed(recommendation: str, undetermined: list[str]) -> str:
+def unassessed(recommendation: str, undetermined: list[CriterionResult]) -> str:
+    """The recommendation, then the criteria the record cannot decide, by their text (the codes are in
+    GuidelineResult.undetermined); readers that show those texts elsewhere cut at NOT_ASSESSABLE."""
     if not undetermined:
         return recommendation
-    return f"{recommendation}; not assessable from the record: {', '.join(undetermined)}"
+    return f"{recommendation}{NOT_ASSESSABLE}{'; '.join(c.text for c in undetermined)}"
+
+
+NOT_ASSESSABLE = "; not assessable from the record: "
+NOTHING_JUDGED = "Not assessed yet: the record lacks what the criteria need"

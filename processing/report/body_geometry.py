@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import math
 
-from schemas.burn_chart import BurnDepth, LundBrowderRegion
+from schemas.burn_chart import REGION_NAMES, BurnDepth, LundBrowderRegion
 
 R = LundBrowderRegion
 FRONT, BACK = "front", "back"
@@ -172,21 +172,5 @@ def inner_point(poly) -> tuple[float, float]:
     return max((c for c in candidates if inside(*c, poly)), key=lambda c: _edge_distance(*c, poly))
 
 
-_PARTS = {"upper_arm": "upper arm", "lower_arm": "forearm", "lower_leg": "lower leg"}
-_FACES = {"anterior": "front", "posterior": "back", "palmar": "palm", "dorsal": "back"}
-_SINGLE = {R.head_anterior: "Head, front", R.head_posterior: "Head, back", R.neck_anterior: "Neck, front"}
-_SINGLE |= {R.neck_posterior: "Neck, back", R.trunk_anterior: "Trunk, front", R.trunk_posterior: "Trunk, back"}
-_SINGLE |= {R.genitalia: "Genitalia", R.buttock_right: "Right buttock", R.buttock_left: "Left buttock"}
-
-
-def _region_label(region: LundBrowderRegion) -> str:
-    if region in _SINGLE:
-        return _SINGLE[region]
-    part, side, face = region.value.rsplit("_", 2)
-    if part == "foot":
-        return f"{side.capitalize()} foot, {'top' if face == 'dorsal' else 'sole'}"
-    return f"{side.capitalize()} {_PARTS.get(part, part)}, {_FACES[face]}"
-
-
-REGION_LABELS: dict[LundBrowderRegion, str] = {region: _region_label(region) for region in LundBrowderRegion}
-"""Region -> its name for a reader, e.g. "Right thigh, front", "Left hand, palm", "Right foot, sole"."""
+REGION_LABELS = REGION_NAMES
+"""Region -> its name for a reader (schemas.burn_chart.REGION_NAMES)."""

@@ -4,6 +4,7 @@ intake."""
 
 from __future__ import annotations
 
+from processing.clinical.referral_rules import NOT_ASSESSABLE
 from processing.report.figures import clock, figure
 from processing.report.history_text import allergy_lines, history_facts, medication_lines, tetanus_lines
 from processing.report.layout import GREY, NOT_RECORDED, URGENT, ReportPDF
@@ -63,7 +64,7 @@ def at_a_glance(pdf: ReportPDF, r: EncounterSnapshot) -> None:
     else:
         rows.append(("%TBSA", "not computed (burn chart or age missing)"))
     if a is not None and a.referral is not None:
-        rows.append(("Referral", a.referral.current.recommendation.split("; not assessable")[0]))
+        rows.append(("Referral", a.referral.current.recommendation.split(NOT_ASSESSABLE)[0]))
     plan = r.fluids_now
     if plan is not None and plan.formal_resuscitation_indicated and plan.phase is not FluidPhase.complete:
         rows.append(

@@ -21,7 +21,9 @@ from base.accounts.permissions import Principal
 from base.web.pages.clinic_time import CLOCK_KEY, ClinicClock
 from base.web.pages.fluid_card import fluid_card
 from base.web.pages.forms_fields import errors_in
+from base.web.pages.referral_card import TIER_WORDS, referral_card
 from base.web.pages.session import request_csrf_token
+from schemas.burn_chart import region_name
 
 BASE_TEMPLATES = Path(__file__).resolve().parents[1] / "templates"
 SITE_NAME_KEY = "site_name"
@@ -91,9 +93,12 @@ def environment(directories: Sequence[Path], clock: ClinicClock | None = None) -
     env.filters["number"] = number
     env.filters["when"] = lambda value: when(value, clock)
     env.filters["patient_name"] = patient_name
+    env.filters["region_name"] = region_name
     env.globals["version"] = __version__
     env.globals["errors_in"] = errors_in
     env.globals["fluid_card"] = fluid_card
+    env.globals["referral_card"] = referral_card
+    env.globals["tier_words"] = TIER_WORDS
     return env
 
 
