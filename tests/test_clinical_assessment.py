@@ -243,7 +243,7 @@ def test_bad_chart_blocks_tbsa_and_the_fluid_plan_only():
     parts[RecordKind.burn_chart] = BurnChart(encounter_id=EID, assessed_at=ARRIVAL, entries=entries)
     a = run(parts=parts)
     assert a.tbsa is None and a.fluids is None
-    assert a.calculator_errors[0].startswith("%TBSA: burn chart: genitalia is charted twice at depth deep_partial")
+    assert a.calculator_errors[0].startswith("%TBSA: burn chart: Genitalia is charted twice at depth deep_partial")
     assert a.calculator_errors[1] == (
         "fluid plan: not computed: needs the %TBSA, which could not be worked out (see %TBSA)"
     )

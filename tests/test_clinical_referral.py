@@ -69,7 +69,7 @@ def test_small_full_thickness_burn_is_immediate():
     assert "aba2022.full_thickness" in r.current.met
     assert r.current.recommendation == IMMEDIATE
     assert criterion(r.current, "aba2022.full_thickness").reason == (
-        "full-thickness burns 2.00 %TBSA (lower_leg_right_anterior)"
+        "full-thickness burns 2.00 %TBSA (right lower leg, front)"
     )
     assert "aba2006.third_degree" in r.older.met
 
@@ -81,7 +81,7 @@ def test_child_3_years_4_percent_scald_is_immediate():
     assert r.current.recommendation == IMMEDIATE
     pediatric = criterion(r.current, "aba2022.pediatric")
     assert pediatric.tier is ReferralTier.immediate
-    assert pediatric.reason == "child (age 3 years, weight 14 kg) with burns charted (trunk_anterior)"
+    assert pediatric.reason == "child (age 3 years, weight 14 kg) with burns charted (trunk, front)"
     facility = criterion(r.older, "aba2006.children_facility")
     assert facility.met is None
     assert "facility" in facility.reason
@@ -127,7 +127,8 @@ def test_hand_deep_partial_is_immediate_superficial_partial_only_older_list():
 def test_face_from_anterior_head_and_perineum_from_special_areas():
     face = assess_referral(inputs((R.head_anterior, 0.5, D.full_thickness)))
     reason = criterion(face.current, "aba2022.critical_areas_deep").reason
-    assert "face" in reason and "anterior head region is taken to include the face" in reason
+    assert reason.startswith("face: head, front (full thickness)")
+    assert "anterior head region is taken to include the face" in reason
     perineum = assess_referral(
         inputs((R.genitalia, 0.0, D.superficial_partial), special=[(SpecialArea.perineum, D.deep_partial)])
     )
@@ -182,7 +183,7 @@ def test_deep_partial_3_percent_forearm_adult_is_potentially_deep():
     deep = criterion(r.current, "aba2022.potentially_deep")
     assert deep.tier is ReferralTier.consult
     assert deep.reason == (
-        "deep partial-thickness burns 3.00 %TBSA (lower_arm_right_anterior, lower_arm_right_posterior): "
+        "deep partial-thickness burns 3.00 %TBSA (right forearm, front; right forearm, back): "
         "potentially deep"
     )
     assert r.current.recommendation == CONSULT

@@ -204,13 +204,13 @@ def test_impossible_age_is_rejected(age):
 
 def test_region_fractions_over_one_are_rejected_naming_the_region():
     c = chart((R.thigh_left_anterior, 0.7, D.deep_partial), (R.thigh_left_anterior, 0.5, D.full_thickness))
-    with pytest.raises(InvalidInput, match="thigh_left_anterior"):
+    with pytest.raises(InvalidInput, match="Left thigh, front"):
         tbsa(c, 30)
 
 
 def test_same_region_and_depth_twice_is_rejected():
     c = chart((R.genitalia, 0.2, D.deep_partial), (R.genitalia, 0.3, D.deep_partial))
-    with pytest.raises(InvalidInput, match="genitalia"):
+    with pytest.raises(InvalidInput, match="Genitalia"):
         tbsa(c, 30)
 
 
@@ -254,7 +254,7 @@ def test_validate_chart_names_every_entry_of_an_overfull_region():
     )
     with pytest.raises(
         InvalidInput,
-        match=r"thigh_left_anterior is charted as 1\.20 .*\(\$\.entries\[1\]\.fraction, \$\.entries\[2\]\.fraction\)",
+        match=r"Left thigh, front is charted as 1\.20 .*\(\$\.entries\[1\]\.fraction, \$\.entries\[2\]\.fraction\)",
     ) as exc:
         validate_chart(c)
     assert [p.field for p in exc.value.errors] == ["$.entries[1].fraction", "$.entries[2].fraction"]
@@ -265,7 +265,7 @@ def test_validate_chart_names_the_duplicate_entry():
         (R.genitalia, 0.2, D.deep_partial), (R.head_anterior, 1, D.superficial), (R.genitalia, 0.3, D.deep_partial)
     )
     with pytest.raises(
-        InvalidInput, match=r"genitalia is charted twice at depth deep_partial \(also \$\.entries\[0\]\)"
+        InvalidInput, match=r"Genitalia is charted twice at depth deep_partial \(also \$\.entries\[0\]\)"
     ) as exc:
         validate_chart(c)
     assert [p.field for p in exc.value.errors] == ["$.entries[2].depth"]

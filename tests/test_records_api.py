@@ -195,7 +195,7 @@ def test_an_impossible_chart_is_refused_and_nothing_is_written(client, clin, enc
     )
     r = client.put(f"/api/v1/encounters/{eid}/burn-chart", json=chart, headers={**clin, "If-None-Match": "*"})
     assert r.status_code == 422
-    assert "trunk_anterior" in r.json()["detail"]
+    assert "Trunk, front" in r.json()["detail"]
     assert _count_versions(services) == before
     fraction = _chart(eid, [{"region": "trunk_anterior", "fraction": 1.5, "depth": "deep_partial"}])
     r = client.put(f"/api/v1/encounters/{eid}/burn-chart", json=fraction, headers={**clin, "If-None-Match": "*"})

@@ -12,7 +12,7 @@ from __future__ import annotations
 from processing.clinical.decision_inputs import DecisionInputs
 from processing.clinical.medicines import anticoagulants
 from processing.clinical.sources_major import JTS_BURN_CARE, VICBURNS_CIRCUMFERENTIAL
-from schemas.burn_chart import BurnDepth
+from schemas.burn_chart import BurnDepth, region_name
 from schemas.decision_support import InputUsed, Recommendation, RecommendationCategory
 
 DEEP = (BurnDepth.deep_partial, BurnDepth.full_thickness)
@@ -34,7 +34,7 @@ def _circumferential(inputs: DecisionInputs, words: tuple[str, ...], recorded: b
     chart = inputs.chart
     regions = sorted(
         {
-            e.region.value.replace("_", " ")
+            region_name(e.region).lower()
             for e in chart.value.entries
             if e.circumferential and e.depth in DEEP and any(w in e.region.value for w in words)
         }
@@ -43,7 +43,7 @@ def _circumferential(inputs: DecisionInputs, words: tuple[str, ...], recorded: b
     )
     used: list[InputUsed] = []
     if regions:
-        used.append(chart.used("circumferential deep burn charted", ", ".join(regions)))
+        used.append(chart.used("circumferential deep burn charted", "; ".join(regions)))
     if recorded:
         used.append(inputs.primary.used(label, True))
     return regions, used
@@ -70,7 +70,7 @@ def _limb(inputs: DecisionInputs) -> list[Recommendation]:
     pulseless = circulation is not None and circulation.distal_pulses_present is False
     if pulseless:
         used.append(inputs.primary.used("distal pulses present", False))
-    where = f" ({', '.join(regions)})" if regions else ""
+    where = f" ({'; '.join(regions)})" if regions else ""
     details = [
         *_anticoagulant_line(inputs, used, "Escharotomy is expected to bleed: tell the burn surgeon."),
         CHECKS,

@@ -24,13 +24,13 @@ def referral(inputs: DecisionInputs) -> tuple[list[Recommendation], list[str]]:
     current = result.current
     met = [c for c in current.criteria if c.met]
     immediate = any(c.tier is ReferralTier.immediate for c in met)
-    used = [assessment.used("referral criteria met", ", ".join(current.met) or "none")]
-    if current.undetermined:
-        used.append(assessment.used("referral criteria undetermined", ", ".join(current.undetermined)))
+    open_criteria = [c.text for c in current.criteria if c.met is None]
+    used = [assessment.used("referral criteria met", "; ".join(c.text for c in met) or "none")]
+    if open_criteria:
+        used.append(assessment.used("referral criteria undetermined", "; ".join(open_criteria)))
     head = current.recommendation.split(NOT_ASSESSABLE)[0]
     text = f"Referral ({current.guideline}): {head}."
     details = [f"{c.text}: {c.reason}" for c in met]
-    open_criteria = [c.text for c in current.criteria if c.met is None]
     if open_criteria:
         details.append("Not assessable from the record (record what is missing): " + "; ".join(open_criteria))
     return [

@@ -30,7 +30,7 @@ from processing.clinical.rule_of_nines import (
     nines_variant_for_age,
     rule_of_nines,
 )
-from schemas.burn_chart import AgeAdjustment, BurnChart, BurnDepth
+from schemas.burn_chart import AgeAdjustment, BurnChart, BurnDepth, region_name
 from schemas.burn_chart import LundBrowderRegion as R
 from schemas.clinical_results import AgeSource, RegionContribution, TbsaResult
 from schemas.errors import InvalidInput
@@ -182,14 +182,14 @@ def validate_chart(chart: BurnChart) -> None:
         at = f"$.entries[{i}]"
         region = problems.check(member, R, entry.region, "Lund-Browder region", field=f"{at}.region")
         depth = problems.check(member, BurnDepth, entry.depth, "burn depth", field=f"{at}.depth")
-        where = region.value if region is not None else "the region"
+        where = region_name(region).lower() if region is not None else "the region"
         fraction = problems.check(check_fraction, entry.fraction, where, field=f"{at}.fraction")
         if region is None or depth is None or fraction is None:
             continue
         if (region, depth) in first_at:
             problems.add(
                 f"{at}.depth",
-                f"{region.value} is charted twice at depth {depth.value} (also $.entries[{first_at[region, depth]}]): "
+                f"{region_name(region)} is charted twice at depth {depth.value} (also $.entries[{first_at[region, depth]}]): "
                 "merge the two entries into one",
             )
         first_at.setdefault((region, depth), i)
@@ -198,7 +198,7 @@ def validate_chart(chart: BurnChart) -> None:
     for region, total in region_total.items():
         if total > 1 + _FRACTION_TOLERANCE:
             message = (
-                f"{region.value} is charted as {total:.2f} of its area burned across depths: "
+                f"{region_name(region)} is charted as {total:.2f} of its area burned across depths: "
                 "the fractions of one region must add up to at most 1"
             )
             for i in region_entries[region]:

@@ -76,7 +76,7 @@ def potentially_deep(inp: ReferralInputs) -> Verdict:
     if not where:
         return False, "no deep partial-thickness burn charted (full-thickness burns are judged in the immediate tier)"
     size = f" {inp.tbsa.deep_partial_percent:.2f} %TBSA" if inp.tbsa is not None else ""
-    return True, f"deep partial-thickness burns{size} ({', '.join(where)}): potentially deep"
+    return True, f"deep partial-thickness burns{size} ({'; '.join(where)}): potentially deep"
 
 
 def pain(inp: ReferralInputs) -> Verdict:
@@ -132,7 +132,7 @@ def pediatric(inp: ReferralInputs) -> Verdict:
         burned = burned_regions(inp.chart, frozenset(BurnDepth))
         burned = burned or [SpecialArea(s.area).value for s in inp.chart.special_areas]
         if burned:
-            return True, f"child ({who}) with burns charted ({', '.join(burned)}){safeguarding}"
+            return True, f"child ({who}) with burns charted ({'; '.join(burned)}){safeguarding}"
     if inp.mechanism is not None:
         kind = MechanismType(inp.mechanism.type).value
         return True, f"child ({who}) with a burn injury ({kind}){safeguarding}"

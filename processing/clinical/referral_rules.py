@@ -22,7 +22,7 @@ from collections.abc import Callable
 import msgspec
 
 from processing.clinical.children import aba_pediatric
-from schemas.burn_chart import BurnChart, BurnDepth, LundBrowderRegion, SpecialArea
+from schemas.burn_chart import BurnChart, BurnDepth, LundBrowderRegion, SpecialArea, region_name
 from schemas.clinical_results import (
     CriterionResult,
     ReferralTier,
@@ -85,7 +85,11 @@ class ReferralInputs(msgspec.Struct, frozen=True, kw_only=True):
 
 
 def burned_regions(chart: BurnChart, depths: frozenset[BurnDepth]) -> list[str]:
-    return [LundBrowderRegion(e.region).value for e in chart.entries if e.fraction > 0 and BurnDepth(e.depth) in depths]
+    return [
+        region_name(LundBrowderRegion(e.region)).lower()
+        for e in chart.entries
+        if e.fraction > 0 and BurnDepth(e.depth) in depths
+    ]
 
 
 def burned_anywhere(chart: BurnChart, depths: frozenset[BurnDepth]) -> list[str]:
@@ -98,16 +102,20 @@ def burned_anywhere(chart: BurnChart, depths: frozenset[BurnDepth]) -> list[str]
 def _area_hits(chart: BurnChart, area: SpecialArea, depths: frozenset[BurnDepth]) -> list[str]:
     """What shows this critical area burned at one of these depths: chart regions and special areas."""
     hits = [
-        f"{LundBrowderRegion(e.region).value} {BurnDepth(e.depth).value}"
+        f"{region_name(LundBrowderRegion(e.region)).lower()} ({_depth_words(e.depth)})"
         for e in chart.entries
         if e.fraction > 0 and e.region in AREA_REGIONS[area] and BurnDepth(e.depth) in depths
     ]
     hits += [
-        f"special area {BurnDepth(s.depth).value}"
+        f"special area ({_depth_words(s.depth)})"
         for s in chart.special_areas
         if s.area == area and BurnDepth(s.depth) in depths
     ]
     return hits
+
+
+def _depth_words(depth: BurnDepth | str) -> str:
+    return BurnDepth(depth).value.replace("_", " ")
 
 
 def _critical_areas(chart: BurnChart, depths: frozenset[BurnDepth]) -> list[str]:
@@ -116,9 +124,9 @@ def _critical_areas(chart: BurnChart, depths: frozenset[BurnDepth]) -> list[str]
     for area in AREA_REGIONS:
         hits = _area_hits(chart, area, depths)
         if hits:
-            from_head = any(hit.startswith(LundBrowderRegion.head_anterior.value) for hit in hits)
+            from_head = any(hit.startswith(region_name(LundBrowderRegion.head_anterior).lower()) for hit in hits)
             note = " (the anterior head region is taken to include the face)" if from_head else ""
-            found.append(f"{area.value}: {', '.join(hits)}{note}")
+            found.append(f"{area.value}: {' and '.join(hits)}{note}")
     return found
 
 
@@ -152,7 +160,7 @@ def full_thickness(inp: ReferralInputs) -> Verdict:
     if not where:
         return False, "no full-thickness burn charted"
     size = f" {inp.tbsa.full_thickness_percent:.2f} %TBSA" if inp.tbsa is not None else ""
-    return True, f"full-thickness burns{size} ({', '.join(where)})"
+    return True, f"full-thickness burns{size} ({'; '.join(where)})"
 
 
 def partial_size(inp: ReferralInputs) -> float | Verdict:

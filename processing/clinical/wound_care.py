@@ -9,7 +9,7 @@ import datetime as dt
 from processing.clinical.decision_inputs import DecisionInputs
 from processing.clinical.sources import ANZCOR_FIRST_AID, ELEVATION, VICBURNS_DRESSINGS
 from processing.clinical.temperature import STOP_COOLING_BELOW_C
-from schemas.burn_chart import BurnDepth
+from schemas.burn_chart import BurnDepth, region_name
 from schemas.decision_support import Recommendation, RecommendationCategory
 
 COOLING_WINDOW_H = 3.0
@@ -71,7 +71,7 @@ def _elevation(inputs: DecisionInputs) -> list[Recommendation]:
             key="wound_care.elevation",
             category=RecommendationCategory.wound_care,
             text="Elevate the burned limb to reduce swelling.",
-            inputs=[chart.used("limb regions burned", ", ".join(r.replace("_", " ") for r in limbs))],
+            inputs=[chart.used("limb regions burned", "; ".join(region_name(r).lower() for r in limbs))],
             source=ELEVATION,
         )
     ]

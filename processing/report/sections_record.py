@@ -6,7 +6,7 @@ from processing.report.body_diagram import draw_body_chart
 from processing.report.figures import clock, figure
 from processing.report.layout import GREY, URGENT, ReportPDF
 from processing.report.record_text import mechanism_text, primary_facts, secondary_lines, words
-from schemas.burn_chart import BurnDepth
+from schemas.burn_chart import BurnDepth, region_name
 from schemas.clinical_results import FluidPhase
 from schemas.encounter_snapshot import EncounterSnapshot
 
@@ -76,7 +76,7 @@ def burn_chart(pdf: ReportPDF, r: EncounterSnapshot) -> None:
             ]
         )
         rows = [
-            [words(c.region), DEPTH_LABEL[c.depth], f"{c.fraction:.0%}", f"{c.tbsa_percent:.2f} %"]
+            [region_name(c.region), DEPTH_LABEL[c.depth], f"{c.fraction:.0%}", f"{c.tbsa_percent:.2f} %"]
             for c in tbsa.contributions
         ]
         pdf.table(["Region", "Depth", "Share burned", "%TBSA"], rows, [62, 58, 28, 30])

@@ -16,6 +16,8 @@ from typing import Any, Literal
 import msgspec
 from msgspec import inspect as mi
 
+from schemas.burn_chart import REGION_NAMES
+
 Kind = Literal["text", "textarea", "number", "select", "checkbox", "tristate", "date", "datetime", "group", "list"]
 TEXTAREA_OVER = 200
 """Strings allowed more characters than this get a multi-line box."""
@@ -191,7 +193,7 @@ def _choices(values: list[str], optional: bool, required: bool, default: Any) ->
     """A select's options, a blank one first: no form pre-selects a value the person did not choose. Left blank, an
     optional field is not recorded, a field with a default gets it ("unknown": not recorded), a required one is
     refused."""
-    choices = [(v, human(v)) for v in values]
+    choices = [(v, REGION_NAMES.get(v) or human(v)) for v in values]  # a region by its name, not its code
     if optional:
         choices.insert(0, ("", NOT_RECORDED))
     elif required:
