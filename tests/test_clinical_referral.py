@@ -183,8 +183,7 @@ def test_deep_partial_3_percent_forearm_adult_is_potentially_deep():
     deep = criterion(r.current, "aba2022.potentially_deep")
     assert deep.tier is ReferralTier.consult
     assert deep.reason == (
-        "deep partial-thickness burns 3.00 %TBSA (right forearm, front; right forearm, back): "
-        "potentially deep"
+        "deep partial-thickness burns 3.00 %TBSA (right forearm, front; right forearm, back): potentially deep"
     )
     assert r.current.recommendation == CONSULT
 
