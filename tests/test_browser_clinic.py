@@ -14,6 +14,7 @@ import pytest
 
 from gateway.pages.encounter_view import FORM_PAGES
 from harness.browser import DESKTOP, PHONE, TABLET, browser_missing, distinct_colours, shot
+from harness.page_fit import fit_problems
 from harness.plain_words import internal_codes
 from harness.processes import PASSWORD
 from harness.sites import Sites, cli
@@ -304,19 +305,38 @@ def test_the_clinicians_flow_end_to_end_and_the_consultants_advice_back(sites, b
     shot(page, "15-advice-at-the-clinic")
     center.close()
 
-    # Phone and tablet: every page fits the screen's width (no sideways scrolling) and speaks clinical words.
-    pages = {"encounter": "", "burn-chart": "/burn-chart?region=trunk_anterior", "pictures": "/pictures"}
-    pages |= {"analyses": "/analyses"} | {slug: f"/parts/{slug}" for slug in FORM_PAGES}
-    page.goto(patient_url)
-    assert internal_codes(page.inner_text("body")) == [], "the patient page shows codes"
-    for width, height in (PHONE, TABLET):
+    # A full-thickness burn of the forearm as well: the referral becomes urgent, and the summary leads with it.
+    tab(page, "Burn chart")
+    page.locator('a[data-region="lower_arm_left_anterior"]').click()
+    page.get_by_label("Full thickness (%)").fill("30")
+    page.get_by_role("button", name="Save region").click()
+    expect(page.locator("#tbsa-figure .value")).not_to_have_text("7.1 %")
+
+    # Phone, tablet and desktop: every page fits the screen's width (no sideways scrolling, no word broken in a
+    # table cell) and speaks clinical words; on a phone the urgent recommendations are in the first screen.
+    pages = {"encounter": encounter_url, "burn-chart": encounter_url + "/burn-chart?region=trunk_anterior"}
+    pages |= {"pictures": encounter_url + "/pictures", "analyses": encounter_url + "/analyses"}
+    pages |= {slug: f"{encounter_url}/parts/{slug}" for slug in FORM_PAGES}
+    pages |= {"patients": clinic + "/patients", "patient": patient_url, "burn-center": clinic + "/transfers"}
+    page.goto(encounter_url)
+    pages["analysis"] = clinic + page.locator(".summary-facts a[href^='/analyses/']").get_attribute("href")
+    misfits: dict[str, list[str]] = {}
+    for width, height in (PHONE, TABLET, DESKTOP):
         page.set_viewport_size({"width": width, "height": height})
-        for name, suffix in pages.items():
-            page.goto(encounter_url + suffix)
+        for name, url in pages.items():
+            page.goto(url)
             shot(page, f"11-{name}-{width}")
             assert internal_codes(page.inner_text("body")) == [], f"{name} shows codes instead of clinical words"
-            overflow = page.evaluate("document.documentElement.scrollWidth - window.innerWidth")
-            assert overflow <= 0, f"{name} is {overflow} px wider than a {width} px screen"
+            if problems_here := fit_problems(page):
+                misfits[f"{name} at {width} px"] = problems_here
+        page.goto(encounter_url)
+        urgent = page.locator("#summary-urgent li")
+        assert urgent.count() == page.locator(".recommendation-list li.urgent:has(button:text('Accept'))").count()
+        assert urgent.count() >= 1 and "Referral" in urgent.first.inner_text()
+        last = urgent.last.bounding_box()
+        assert last["y"] + last["height"] <= height, f"the urgent recommendations start below a {width} px screen"
+        shot(page, f"12-encounter-first-screen-{width}", full_page=False)
+    assert not misfits, "pages that do not fit their screen:\n" + "\n".join(f"{k}: {v}" for k, v in misfits.items())
     page.set_viewport_size({"width": DESKTOP[0], "height": DESKTOP[1]})
     assert not problems, f"the browser reported errors: {problems}"
     context.close()

@@ -116,7 +116,9 @@ def test_abcde_secondary_survey_mechanism_and_the_chart_are_on_the_case_page(sen
     assert "chest movement restricted: no" in abcde
     chart = _panel(page, "burn-chart")
     assert chart.count("<svg") == 1 and 'data-region="upper_arm_left_anterior"' in chart
-    rows = re.findall(r"<tr><td>([^<]+)</td><td>([^<]+)</td><td>([^<]+)</td><td>([^<]+)</td></tr>", chart)
+    rows = re.findall(
+        r"<tr><td[^>]*>([^<]+)</td><td[^>]*>([^<]+)</td><td[^>]*>([^<]+)</td><td[^>]*>([^<]+)</td></tr>", chart
+    )
     assert ("Left upper arm, front", "deep partial thickness", "100%", "2.00 %") in rows
     assert ("Trunk, front", "superficial partial thickness", "50%", "6.50 %") in rows
 

@@ -28,7 +28,7 @@ PART_PAGES = {
 FORM_PAGES = {**PART_PAGES, "burn-chart": RecordKind.burn_chart}
 """Every part with a form page: the burn chart's is its whole table (special areas, age adjustment)."""
 PART_TITLES = {
-    RecordKind.intake: "Intake",
+    RecordKind.intake: "History (allergies, medicines, tetanus)",
     RecordKind.primary_survey: "Primary survey (ABCDE)",
     RecordKind.secondary_survey: "Secondary survey",
     RecordKind.mechanism: "Mechanism",

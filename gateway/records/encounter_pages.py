@@ -24,6 +24,7 @@ from gateway.pages.common import (
     saved_first,
     service_errors,
 )
+from gateway.pages.encounter_summary import encounter_summary
 from gateway.pages.encounter_view import (
     FORM_PAGES,
     PART_PAGES,
@@ -74,6 +75,7 @@ class EncounterPages(Controller):
             "encounter.html",
             status,
             view=view,
+            summary=encounter_summary(view),
             tab="overview",
             saved=PART_TITLES.get(PART_PAGES.get(saved), "Burn chart" if saved == "burn-chart" else ""),
             part_pages=PART_PAGES,

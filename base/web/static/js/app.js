@@ -58,3 +58,15 @@ function checkZones(root) {
 }
 checkZones(document);
 document.addEventListener("htmx:load", (event) => checkZones(event.target));
+
+// On a phone the header folds into a Menu button, so the page's own content fills the first screen.
+const header = document.querySelector(".site-header");
+const menuButton = header && header.querySelector(".menu-toggle");
+if (menuButton) {
+  const menu = document.getElementById(menuButton.getAttribute("aria-controls"));
+  header.classList.add("has-menu");
+  menuButton.addEventListener("click", () => {
+    const open = menu.classList.toggle("open");
+    menuButton.setAttribute("aria-expanded", String(open));
+  });
+}
