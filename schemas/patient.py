@@ -32,6 +32,9 @@ class Patient(Message):
     id: Id
     given_name: ShortText = ""
     family_name: ShortText = ""
+    temporary_label: ShortText | None = None
+    """For a patient whose name and record number are not known yet (unconscious, brought in alone): a label the
+    team uses until they are, e.g. "Unknown man, bay 3". A patient needs a name, a record number or this."""
     date_of_birth: dt.date | None = None
     age_estimate_years: Annotated[float, msgspec.Meta(ge=0, le=AGE_MAX_YEARS)] | None = None
     """Used when the date of birth is unknown (common in field clinics)."""

@@ -140,5 +140,7 @@ def test_a_withdrawn_part_is_left_out_and_the_page_shows_the_reading(client, ser
     # The overview page is made from the same reading: the withdrawn intake is not shown as recorded.
     sign_in(client, "clinician")
     page = client.get(f"/encounters/{encounter['id']}").text
-    intake_row = re.search(r"<tr>\s*<td><a href=\"[^\"]+/parts/intake\">Intake</a></td>(.*?)</tr>", page, re.S)
+    intake_row = re.search(
+        r"<tr>\s*<td[^>]*><a href=\"[^\"]+/parts/intake\">History[^<]*</a></td>(.*?)</tr>", page, re.S
+    )
     assert intake_row is not None and "not recorded" in intake_row.group(1)

@@ -101,9 +101,18 @@ def check(conn: sqlite3.Connection, kind: RecordKind, record_id: str, struct, co
     return record_id
 
 
+NAMELESS = (
+    "a patient needs a name or a medical record number; for an unknown patient, give a temporary label "
+    "(e.g. 'Unknown man, bay 3')"
+)
+
+
 def _check_patient(record_id: str, patient: Patient) -> None:
     if patient.id != record_id:
         raise bad_field("$.id", f"id {patient.id} does not match {record_id} in the address")
+    if not any(s and s.strip() for s in (patient.given_name, patient.family_name, patient.medical_record_number)):
+        if not (patient.temporary_label or "").strip():
+            raise bad_field("$.given_name", NAMELESS)
     # The gateway's UTC date can be a day behind the bedside's local date.
     if patient.date_of_birth is not None and patient.date_of_birth > utcnow().date() + dt.timedelta(days=1):
         raise bad_field("$.date_of_birth", "date of birth is in the future")

@@ -66,6 +66,8 @@ def patient(record: Versioned[Patient]) -> dict:
     name = {k: v for k, v in (("family", p.family_name), ("given", [p.given_name] if p.given_name else None)) if v}
     if name:
         out["name"] = [{"use": "official", **name}]
+    elif p.temporary_label:  # an unknown patient: FHIR's "temp" name use, the label as text
+        out["name"] = [{"use": "temp", "text": p.temporary_label}]
     if p.date_of_birth:
         out["birthDate"] = p.date_of_birth.isoformat()
     return out

@@ -17,7 +17,8 @@ def header(pdf: ReportPDF, r: EncounterSnapshot, missing: list[str]) -> None:
     p, e = r.patient.value, r.encounter.value
     pdf.doc_title("Burn assessment report")
     pdf.para("Decision support only — every figure and recommendation is confirmed by a clinician.", bold=True)
-    name = " ".join(x for x in (p.given_name, p.family_name) if x) or NOT_RECORDED
+    name = " ".join(x for x in (p.given_name, p.family_name) if x)
+    name = name or (f"{p.temporary_label} (unknown patient)" if p.temporary_label else NOT_RECORDED)
     age = r.assessment.value.age_years if r.assessment else None
     born = (
         p.date_of_birth.isoformat()

@@ -41,9 +41,16 @@ class NavItem:
 
 
 def patient_name(data: dict) -> str:
-    """How a patient is named on every page: given and family name, or "Unnamed patient"."""
+    """How a patient is named on every page: given and family name; else the unknown patient's temporary label;
+    else the record number; "Unnamed patient" only for records stored before a name or label was required."""
     name = " ".join(p for p in (data.get("given_name", ""), data.get("family_name", "")) if p)
-    return name or "Unnamed patient"
+    if name:
+        return name
+    if label := data.get("temporary_label"):
+        return f"{label} (unknown patient)"
+    if number := data.get("medical_record_number"):
+        return f"Record {number}"
+    return "Unnamed patient"
 
 
 def clinic_clock(request: Request) -> ClinicClock:

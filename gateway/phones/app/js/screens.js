@@ -10,7 +10,10 @@ import { banner, formData, html, localInput, show, when } from "./view.js";
 const go = (hash) => {
   window.location.hash = hash;
 };
-const name = (p) => [p?.data?.given_name, p?.data?.family_name].filter(Boolean).join(" ") || "(no name)";
+const name = (p) =>
+  [p?.data?.given_name, p?.data?.family_name].filter(Boolean).join(" ") ||
+  p?.data?.temporary_label ||
+  (p?.data?.medical_record_number ? `Record ${p.data.medical_record_number}` : "(no name)");
 const options = (list, selected = "") =>
   list.map((o) => html`<option value="${o.value}" ${o.value === selected ? "selected" : ""}>${o.label}</option>`);
 const iso = (local) => (local ? localIso(new Date(local)) : null);
@@ -87,8 +90,12 @@ export async function patientsScreen(query = "") {
         <span class="muted">${p.data.date_of_birth || ""}${p.pending ? " · waiting to send" : ""}</span></li>`)}</ul>
       <details ${all.length ? "" : "open"}><summary>New patient</summary>
       <form id="new-patient" class="stack">
-        <label>Given name <input name="given_name" required></label>
-        <label>Family name <input name="family_name" required></label>
+        <p class="muted">A name or a record number; for an unknown patient, a temporary label.</p>
+        <label>Given name <input name="given_name" autocomplete="off"></label>
+        <label>Family name <input name="family_name" autocomplete="off"></label>
+        <label>Record number <input name="medical_record_number" autocomplete="off"></label>
+        <label>Unknown patient: temporary label <input name="temporary_label" placeholder="e.g. Unknown man, bay 3"></label>
+        <p class="error" id="patient-problem" role="alert" hidden></p>
         <label>Date of birth <input name="date_of_birth" type="date"></label>
         <label>Sex <select name="sex">${options((await choicesOf()).sexes, "unknown")}</select></label>
         <label>Weight (kg) <input name="weight_kg" type="number" min="0.3" max="400" step="0.1"></label>
@@ -100,8 +107,16 @@ export async function patientsScreen(query = "") {
         submit: async (event) => {
           event.preventDefault();
           const f = formData(event.target);
+          const known = ["given_name", "family_name", "medical_record_number", "temporary_label"].filter((k) => f[k]?.trim());
+          if (!known.length) {
+            const problem = document.getElementById("patient-problem");
+            problem.textContent = "Give a name or a record number, or a temporary label for an unknown patient.";
+            problem.hidden = false;
+            return;
+          }
           const id = uuid7();
-          const data = { id, given_name: f.given_name, family_name: f.family_name, sex: f.sex };
+          const data = { id, given_name: f.given_name || "", family_name: f.family_name || "", sex: f.sex };
+          for (const k of ["medical_record_number", "temporary_label"]) if (f[k]?.trim()) data[k] = f[k].trim();
           if (f.date_of_birth) data.date_of_birth = f.date_of_birth;
           if (f.weight_kg) Object.assign(data, { weight_kg: Number(f.weight_kg), weight_source: "estimated" });
           await change("patient", id, "create", data);
