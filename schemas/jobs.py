@@ -211,6 +211,12 @@ class JobEvent(Frozen):
     message: str
     error: str | None = None
     result_status: str | None = None
+    heading: str = ""
+    """The state in words, the step and the time left: "Building the surface…, step 4 of 8, about 40 s left"."""
+    step: int | None = None
+    steps: int = 0
+    remaining_s: float | None = None
+    """Seconds left by the stage times this gateway has measured (None until it has finished an analysis)."""
 
 
 class BurnAnalysis(Frozen):

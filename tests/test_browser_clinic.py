@@ -175,6 +175,8 @@ def test_the_clinicians_flow_end_to_end_and_the_consultants_advice_back(sites, b
         " && document.querySelector('#job-progress').value > 0",
         timeout_s=180,
     )
+    progress_heading = page.inner_text("#progress-heading")  # the state in words and the step, never a code
+    assert re.search(r"^[A-Z][a-z ].*…, step [1-8] of 8", progress_heading), progress_heading
     shot(page, "06-analysis-progress")
     page.wait_for_selector("#result", timeout=ANALYSIS_TIMEOUT_MS)
     assert "geometry, not burn depth" in page.inner_text("#metrics")

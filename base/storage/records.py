@@ -143,6 +143,15 @@ def list_heads(
     return [row_to_record(r) for r in conn.execute(sql, params)]
 
 
+def newest_heads(conn: sqlite3.Connection, kind: RecordKind, limit: int) -> list[Record]:
+    """The `limit` live records of a kind most recently written, newest first."""
+    sql = (
+        f"SELECT {_COLUMNS} FROM record_heads h JOIN record_versions v ON v.seq = h.seq"
+        " WHERE h.kind = ? AND h.deleted = 0 ORDER BY h.seq DESC LIMIT ?"
+    )
+    return [row_to_record(r) for r in conn.execute(sql, (kind.value, limit))]
+
+
 def heads_of_children(
     conn: sqlite3.Connection, parent_id: str, kinds: Iterable[RecordKind]
 ) -> dict[RecordKind, Record]:

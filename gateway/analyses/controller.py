@@ -15,15 +15,22 @@ from base.web.paths import IdPath
 from base.web.problems import BODY, ONE, problems
 from base.web.site import AuthedRequest
 from gateway.dependencies import ServicesDep
+from gateway.jobs.estimate import StageTimes, heading
 from schemas.analysis import AnalysisResult
+from schemas.base import utcnow
 from schemas.jobs import FINISHED, AnalysisJob, AnalysisRequest, JobAttempt, JobEvent
 
 EVENT_POLL_S = 0.5
 KEEPALIVE_S = 15.0
 
 
-def _event(job: AnalysisJob) -> JobEvent:
+def _event(job: AnalysisJob, times: StageTimes) -> JobEvent:
+    said = heading(job, times, utcnow())
     return JobEvent(
+        heading=said.text,
+        step=said.step,
+        steps=said.steps,
+        remaining_s=said.remaining_s,
         id=job.id,
         state=job.state,
         stage=job.stage,
@@ -110,11 +117,12 @@ class AnalysisController(Controller):
     def events(self, job_id: IdPath, request: AuthedRequest, services: ServicesDep) -> ServerSentEvent:
         first = services.analyses.get(request.user, job_id)  # 404/403 before the stream starts
         user = request.user
+        times = services.analyses.stage_times(user)
 
         async def stream() -> AsyncIterator[ServerSentEventMessage]:
             job, last, quiet = first, None, 0.0
             while True:
-                event = _event(job)
+                event = _event(job, times)
                 if event != last:
                     finished = job.state in FINISHED
                     yield ServerSentEventMessage(

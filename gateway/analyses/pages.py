@@ -18,9 +18,11 @@ from base.web.site import AuthedRequest
 from gateway.analyses.summary import summary
 from gateway.capture.picture_pages import grouped
 from gateway.dependencies import ServicesDep
+from gateway.jobs.estimate import heading
 from gateway.pages.common import posted_text
 from gateway.pages.encounter_view import encounter_header
 from gateway.pages.healing_view import PAINTED_SURFACE
+from schemas.base import utcnow
 from schemas.errors import BurnedgeError, InvalidInput
 from schemas.jobs import FINISHED, AnalysisRequest
 
@@ -110,6 +112,7 @@ class AnalysisPages(Controller):
         job = services.analyses.get(request.user, job_id)
         encounter, patient = encounter_header(services, request.user, job.encounter_id)
         result, problem, artifacts, lead = None, None, [], None
+        progress = heading(job, services.analyses.stage_times(request.user), utcnow())
         if job.state in FINISHED:
             try:
                 result = services.analyses.result(request.user, job_id)
@@ -126,6 +129,7 @@ class AnalysisPages(Controller):
             patient=patient,
             tab="analyses",
             job=job,
+            progress=progress,
             finished=job.state in FINISHED,
             result=result,
             lead=lead,

@@ -19,6 +19,7 @@ from base.storage import records as store
 from gateway.capture.assets import AssetService
 from gateway.jobs import folders
 from gateway.jobs.capture_time import capture_time
+from gateway.jobs.estimate import HISTORY, StageTimes, stage_times
 from gateway.jobs.queue import JobQueue
 from gateway.records.validation import require_live_encounter
 from gateway.storage.database import Database
@@ -145,6 +146,14 @@ class AnalysisService:
     def get(self, principal: Principal, job_id: str) -> AnalysisJob:
         require_read(principal, RecordKind.burn_analysis)
         return self.queue.get(job_id)
+
+    def stage_times(self, principal: Principal) -> StageTimes:
+        """Each stage's median time over this gateway's latest finished analyses (gateway/jobs/estimate.py)."""
+        require_read(principal, RecordKind.burn_analysis)
+        with self.db.read() as conn:
+            latest = store.newest_heads(conn, RecordKind.burn_analysis, HISTORY)
+        results = [msgspec.convert(r.data, BurnAnalysis).result for r in latest]
+        return stage_times([(r.timings_s, r.reused_stages) for r in results])
 
     def attempts(self, principal: Principal, job_id: str) -> list[JobAttempt]:
         """Every try of the job and how it ended; the logs' server paths are shortened."""

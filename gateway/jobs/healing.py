@@ -86,10 +86,11 @@ def _charted(conn: sqlite3.Connection, patient_id: str, encounter_id: str) -> Ch
         return Charted(
             chart=msgspec.convert(chart.data, BurnChart),
             age_years=age,
-            described_as=f"burn_chart {candidate} version {chart.meta.version} (encounter of {when})",
+            described_as=f"the burn chart of the encounter of {when} (version {chart.meta.version})",
         )
     return None
 
 
 def _day(at: dt.datetime) -> str:
-    return at.date().isoformat()
+    """ "6 Dec 2026": a reader's date that never breaks inside at a line's end, as 2026-12-06 can."""
+    return f"{at.day} {at:%b %Y}"

@@ -27,6 +27,7 @@ from base.storage import records as store
 from base.storage.blobs import MediaStore
 from gateway.jobs import folders
 from gateway.jobs.capture_time import hours_since_injury
+from gateway.jobs.estimate import STAGES
 from gateway.jobs.events import AnalysisStored, Reaction, publish
 from gateway.jobs.queue import Claim, JobQueue
 from gateway.storage import jobs
@@ -43,17 +44,6 @@ from schemas.reconstruction import RulerMark, RulerPoints
 from schemas.records import RecordKind
 
 log = logging.getLogger("burnedge.jobs")
-
-STAGES = {  # stage: (share of the work done when it starts, what the user sees)
-    "inputs": (0.00, "checking the pictures"),
-    "sfm": (0.02, "placing the pictures in 3D (structure from motion)"),
-    "scale": (0.27, "setting the scale from the printed marker"),
-    "dense": (0.29, "building the surface (multi-view stereo)"),
-    "mesh": (0.62, "meshing the surface"),
-    "segment": (0.75, "finding the burn in each picture"),
-    "surface": (0.80, "painting the burn onto the surface"),
-    "metrics": (0.87, "measuring area, perimeter, relief and volume"),
-}
 
 
 def run(config: Config, claim: Claim, reactions: Sequence[Reaction] = ()) -> JobState:

@@ -42,7 +42,7 @@ class Charted:
     chart: BurnChart
     age_years: float
     described_as: str
-    """Which record and version, and which encounter: "burn_chart <id> v3 (encounter of 2026-12-01)"."""
+    """Which record and version, and which encounter: "the burn chart of the encounter of 1 Dec 2026 (version 3)"."""
 
 
 def body_share(regions: list[LundBrowderRegion], measured: Measured, charted: Charted | None) -> BodyShare:

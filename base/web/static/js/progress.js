@@ -7,14 +7,14 @@ document.addEventListener("DOMContentLoaded", () => {
     return;
   }
   const bar = panel.querySelector("progress");
-  const stage = panel.querySelector("[data-stage]");
+  const heading = panel.querySelector("[data-heading]");
   const message = panel.querySelector("[data-message]");
   const source = new EventSource(panel.dataset.events);
   const show = (event) => {
     const job = JSON.parse(event.data);
     bar.value = Math.round((job.fraction || 0) * 100);
     bar.textContent = `${bar.value} %`;
-    stage.textContent = job.stage || job.state;
+    heading.textContent = job.heading || `Analysis ${job.state}`;
     message.textContent = job.error || job.message || "";
   };
   source.addEventListener("progress", show);
