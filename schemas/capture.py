@@ -2,9 +2,13 @@
 
 from __future__ import annotations
 
+import datetime as dt
 import enum
+from typing import Annotated
 
-from schemas.base import Frozen
+import msgspec
+
+from schemas.base import Frozen, ShortText
 from schemas.config import QualityGateConfig, ReadinessConfig
 
 TUS_VERSION = "1.0.0"
@@ -124,6 +128,22 @@ class CaptureMetadata(Frozen, omit_defaults=True):
     frame_rate: float | None = None
 
 
+class SetAside(Frozen):
+    """Why a picture no longer counts (for readiness, analyses and the case sent): set aside by a person, never
+    deleted, and it can be put back."""
+
+    reason: ShortText
+    by: str
+    at: dt.datetime
+
+
+class SetAsideBody(Frozen):
+    """POST /api/v1/assets/{id}/set-aside."""
+
+    reason: Annotated[str, msgspec.Meta(min_length=1, max_length=200)]
+    """Why it should not count, e.g. "blurred" or "wrong patient"."""
+
+
 class Asset(Frozen):
     """A stored photo, video or extracted frame, linked to its encounter. The bytes are kept as received."""
 
@@ -147,6 +167,8 @@ class Asset(Frozen):
     wound_id: str | None = None
     """The wound it shows (Upload-Metadata wound_id, or set later); None when not said. A frame takes its
     video's."""
+    set_aside: SetAside | None = None
+    """Set when a person set it aside; a video's frames follow it."""
 
 
 class UploadPhase(enum.StrEnum):

@@ -13,10 +13,11 @@ from dataclasses import dataclass
 import msgspec
 
 from schemas.base import iso, utcnow
-from schemas.capture import Asset, AssetKind, CaptureMetadata, MediaType, QualityVerdict
+from schemas.capture import Asset, AssetKind, CaptureMetadata, MediaType, QualityVerdict, SetAside
 from schemas.errors import NotFound
 
 _verdict = msgspec.json.Decoder(QualityVerdict)
+_set_aside = msgspec.json.Decoder(SetAside)
 _metadata = msgspec.json.Decoder(CaptureMetadata)
 
 
@@ -49,6 +50,7 @@ def _asset(row: sqlite3.Row) -> Asset:
         created_by=row["created_by"],
         device_id=row["device_id"],
         wound_id=row["wound_id"],
+        set_aside=_set_aside.decode(row["set_aside"]) if row["set_aside"] else None,
     )
 
 
@@ -101,6 +103,12 @@ def set_asset_wound(conn: sqlite3.Connection, asset_id: str, wound_id: str | Non
     conn.execute("UPDATE assets SET wound_id = ? WHERE id = ? OR source_asset_id = ?", (wound_id, asset_id, asset_id))
 
 
+def set_asset_aside(conn: sqlite3.Connection, asset_id: str, set_aside: SetAside | None) -> None:
+    """Set a picture (and a video's frames) aside, or put it back (None), inside the caller's transaction."""
+    text = msgspec.json.encode(set_aside).decode() if set_aside is not None else None
+    conn.execute("UPDATE assets SET set_aside = ? WHERE id = ? OR source_asset_id = ?", (text, asset_id, asset_id))
+
+
 # frames of videos --------------------------------------------------------------------------
 
 
@@ -141,9 +149,10 @@ class EncounterPhoto(msgspec.Struct, frozen=True, kw_only=True):
 
 
 def encounter_photos(conn: sqlite3.Connection, encounter_id: str, limit: int) -> list[EncounterPhoto]:
-    """The encounter's photos in the order they were taken in (up to `limit`), not its videos or frames."""
+    """The encounter's photos in the order they were taken in (up to `limit`), not its videos or frames, nor
+    those set aside."""
     rows = conn.execute(
-        "SELECT id, sha256, media_type FROM assets WHERE encounter_id = ? AND kind = 'photo'"
+        "SELECT id, sha256, media_type FROM assets WHERE encounter_id = ? AND kind = 'photo' AND set_aside IS NULL"
         " ORDER BY created_at, id LIMIT ?",
         (encounter_id, limit),
     ).fetchall()

@@ -108,6 +108,10 @@ class AnalysisService:
         self, principal: Principal, encounter_id: str, body: AnalysisRequest, wound_id: str | None
     ) -> list[Asset]:
         stored = self.assets.for_encounter(principal, encounter_id)
+        aside = [a.filename for a in stored if a.set_aside is not None and body.assets and a.id in body.assets]
+        if aside:
+            raise InvalidInput(f"{', '.join(aside)} set aside: leave them out, or put them back first")
+        stored = [a for a in stored if a.set_aside is None]
         if body.assets is None and wound_id is not None:
             stored = _of_wound(stored, wound_id)
         pending = [a.filename for a in stored if a.kind is AssetKind.video and not _frames_done(self.db, a.id)]

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from litestar import Controller, get, put
+from litestar import Controller, delete, get, post, put
 from litestar.params import JSONBody
 from litestar.response import File
 
@@ -10,7 +10,7 @@ from base.web.paths import IdPath
 from base.web.problems import BODY, ONE, SESSION, problems
 from base.web.site import AuthedRequest
 from gateway.dependencies import ServicesDep
-from schemas.capture import Asset, CaptureReadiness
+from schemas.capture import Asset, CaptureReadiness, SetAsideBody
 from schemas.wound import AssetWound
 
 
@@ -37,6 +37,28 @@ class AssetController(Controller):
         self, asset_id: IdPath, data: JSONBody[AssetWound], request: AuthedRequest, services: ServicesDep
     ) -> Asset:
         return services.assets.set_wound(request.user, asset_id, data.wound_id)
+
+    @post(
+        "/assets/{asset_id:str}/set-aside",
+        sync_to_thread=True,
+        status_code=200,
+        summary="Set a picture aside with a reason: it no longer counts for readiness, analyses or the case sent",
+        responses=problems(*BODY, *SESSION, 404, 422),
+    )
+    def set_aside(
+        self, asset_id: IdPath, data: JSONBody[SetAsideBody], request: AuthedRequest, services: ServicesDep
+    ) -> Asset:
+        return services.assets.set_aside(request.user, asset_id, data.reason)
+
+    @delete(
+        "/assets/{asset_id:str}/set-aside",
+        sync_to_thread=True,
+        status_code=200,
+        summary="Put a picture set aside back: it counts again",
+        responses=problems(*SESSION, 404, 422),
+    )
+    def put_back(self, asset_id: IdPath, request: AuthedRequest, services: ServicesDep) -> Asset:
+        return services.assets.set_aside(request.user, asset_id, None)
 
     @get(
         "/assets/{asset_id:str}/file",

@@ -15,7 +15,7 @@ from base.storage import assets as asset_rows
 from base.storage import audit
 from base.storage.blobs import MediaStore, sha256_of
 from base.storage.records import get_head
-from gateway.records.validation import require_live_encounter
+from gateway.records.validation import bad_field, require_live_encounter
 from gateway.storage import uploads as upload_rows
 from gateway.storage.database import Database
 from gateway.wounds.choice import wound_of_patient
@@ -25,7 +25,7 @@ from processing.capture.quality import gate_bytes
 from processing.capture.readiness import View
 from processing.capture.readiness import assess as assess_readiness
 from schemas.base import iso, utcnow
-from schemas.capture import Asset, AssetKind, CaptureMetadata, CaptureReadiness, MediaType, QualityVerdict
+from schemas.capture import Asset, AssetKind, CaptureMetadata, CaptureReadiness, MediaType, QualityVerdict, SetAside
 from schemas.config import Config
 from schemas.errors import ChecksumMismatch, InvalidInput, PayloadTooLarge
 from schemas.ids import uuid7
@@ -166,6 +166,29 @@ class AssetService:
                 )
             return asset_rows.get_asset(conn, asset_id)
 
+    def set_aside(self, principal: Principal, asset_id: str, reason: str | None) -> Asset:
+        """Set a picture aside with the reason (None puts it back): it no longer counts for readiness, analyses
+        or the case sent; nothing is deleted. A video's frames follow it; a frame alone can be set aside."""
+        require_capture(principal)
+        with self.db.write() as conn:
+            asset = asset_rows.get_asset(conn, asset_id)
+            require_live_encounter(conn, asset.encounter_id)
+            if reason is not None and not reason.strip():
+                raise bad_field("$.reason", "say why the picture should not count")
+            aside = SetAside(reason=reason.strip(), by=principal.username, at=utcnow()) if reason else None
+            if (asset.set_aside is None) != (aside is None):
+                asset_rows.set_asset_aside(conn, asset_id, aside)
+                audit.append(
+                    conn,
+                    action="asset.set_aside" if aside else "asset.put_back",
+                    user_id=principal.user_id,
+                    device_id=principal.device_id,
+                    kind="asset",
+                    record_id=asset_id,
+                    detail=aside.reason if aside else asset.set_aside.reason,
+                )
+            return asset_rows.get_asset(conn, asset_id)
+
     def for_encounter(self, principal: Principal, encounter_id: str) -> list[Asset]:
         require_read(principal, RecordKind.encounter)
         conn = self.db.connection()
@@ -180,7 +203,7 @@ class AssetService:
         views = [
             View(verdict=a.verdict, focal_35mm=a.metadata.focal_length_35mm)
             for a in self.for_encounter(principal, encounter_id)
-            if a.verdict is not None
+            if a.verdict is not None and a.set_aside is None
         ]
         return assess_readiness(views, self.config.readiness, self.config.quality)
 

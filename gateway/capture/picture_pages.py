@@ -14,11 +14,13 @@ from litestar.enums import RequestEncodingType
 from litestar.params import Body
 from litestar.response import File, Redirect, Template
 
+from base.web.pages.forms import FormBody
 from base.web.pages.rendering import page
 from base.web.paths import IdPath
 from base.web.site import AuthedRequest
 from gateway.capture.uploads import check_filename
 from gateway.dependencies import ServicesDep
+from gateway.pages.common import posted_text
 from gateway.pages.encounter_view import encounter_header
 from gateway.scheduler import run_frames_now
 from schemas.capture import Asset, AssetKind
@@ -111,6 +113,16 @@ class PicturePages(Controller):
             query_params={"stored": stored, "refused": refused},
             status_code=303,
         )
+
+    @post("/pictures/{asset_id:str}/set-aside", sync_to_thread=True, status_code=303)
+    def set_aside(self, asset_id: IdPath, request: AuthedRequest, data: FormBody, services: ServicesDep) -> Redirect:
+        asset = services.assets.set_aside(request.user, asset_id, posted_text(data, "reason"))
+        return Redirect(path=f"/encounters/{asset.encounter_id}/pictures#photos-aside", status_code=303)
+
+    @post("/pictures/{asset_id:str}/put-back", sync_to_thread=True, status_code=303)
+    def put_back(self, asset_id: IdPath, request: AuthedRequest, services: ServicesDep) -> Redirect:
+        asset = services.assets.set_aside(request.user, asset_id, None)
+        return Redirect(path=f"/encounters/{asset.encounter_id}/pictures", status_code=303)
 
     @get("/pictures/{asset_id:str}/thumbnail", sync_to_thread=True)
     def thumbnail(self, asset_id: IdPath, request: AuthedRequest, services: ServicesDep) -> File:

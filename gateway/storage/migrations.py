@@ -229,3 +229,10 @@ def m010_wounds(db: Database) -> None:
     from gateway.storage.wound_upgrade import give_each_patient_a_wound
 
     give_each_patient_a_wound(db.conn)
+
+
+@migrations()
+def m011_pictures_set_aside(db: Database) -> None:
+    """A picture set aside by a person (a blurred or wrong shot): why, by whom and when, as JSON of
+    schemas.capture.SetAside; NULL while it counts. Nothing is deleted."""
+    db.execute("ALTER TABLE assets ADD COLUMN set_aside TEXT")
