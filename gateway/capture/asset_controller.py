@@ -55,7 +55,7 @@ class AssetController(Controller):
         sync_to_thread=True,
         status_code=200,
         summary="Put a picture set aside back: it counts again",
-        responses=problems(*SESSION, 404, 422),
+        responses=problems(*ONE, 422),
     )
     def put_back(self, asset_id: IdPath, request: AuthedRequest, services: ServicesDep) -> Asset:
         return services.assets.set_aside(request.user, asset_id, None)
