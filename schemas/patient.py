@@ -51,6 +51,21 @@ class EncounterMode(enum.StrEnum):
     consultation = "consultation"
 
 
+class SharingConsent(enum.StrEnum):
+    """Whether the record and its pictures may be sent to a burn center for advice (telemedicine consent: the
+    consent process is recorded; a signature is not required)."""
+
+    given = "given"
+    """The patient agreed, told what is sent and to whom."""
+    given_by_guardian = "given_by_guardian"
+    """A parent, guardian or the person legally able to agree did."""
+    not_possible = "not_possible"
+    """Could not be asked (the patient cannot answer and no one can answer for them): sent on the clinician's
+    judgement in the patient's interest."""
+    refused = "refused"
+    """The patient refused: the case is not sent."""
+
+
 class Encounter(Message):
     """One visit. The resuscitation clock runs from time_of_injury, not time_of_arrival."""
 
@@ -64,3 +79,5 @@ class Encounter(Message):
     facility: ShortText | None = None
     weight_kg: WeightKg | None = None
     """Weight at this visit; overrides the patient's recorded weight for calculators."""
+    sharing_consent: SharingConsent | None = None
+    """Consent to send this encounter's record and pictures to a burn center for advice (asked for when sending)."""

@@ -32,6 +32,7 @@ from schemas.transfer import (
     OutboxEntry,
     OutboxState,
     SignedEnvelope,
+    SiteIdentity,
     TransferManifest,
 )
 from sync import bundle, case_snapshot, peers
@@ -51,6 +52,13 @@ class Outbox:
         self.db = db
         self.config = config
         self.root = outbox_root(config)
+
+    def preview(self, read: EncounterSnapshot) -> tuple[SiteIdentity, list[bundle.PartData]]:
+        """The center a case would go to and the parts it would carry now, as `read` reads the encounter (before
+        the report and the healing are made, which go with it): what the clinician confirms before sending."""
+        with self.db.read() as conn:
+            center = peers.only_center(conn, self.config.sync.center_id)
+            return center, case_snapshot.snapshot(conn, self.config, read).parts
 
     def queue(
         self,

@@ -235,9 +235,19 @@ def test_the_clinicians_flow_end_to_end_and_the_consultants_advice_back(sites, b
     assert f"segmentation model {version}" in " ".join(text.split())  # the model section names the model
     assert internal_codes(text) == [], "the report shows codes instead of clinical words"
 
+    # Sending asks first: to whom, what goes and its size, and the patient's consent (recorded on the encounter).
     page.goto(encounter_url)
-    page.get_by_role("button", name="Send to the burn center").click()
-    page.wait_for_load_state()
+    page.get_by_role("link", name="Send to the burn center…").click()
+    page.get_by_role("heading", name="Send to the burn center?").wait_for()
+    assert "Test burn center" in page.inner_text("#send-recipient")
+    parts = page.inner_text("#send-parts")
+    assert "Photos (8)" in parts and "3D measurements" in parts and re.search(r"\d+(\.\d)? (kB|MB)", parts)
+    page.get_by_role("button", name="Send now").click()  # no consent chosen: the browser asks for one
+    assert page.url.endswith("/send")
+    page.get_by_label("The patient agreed to the sending").check()
+    shot(page, "10-send-confirmation", readme="page-send-confirmation.png")
+    page.get_by_role("button", name="Send now").click()
+    page.wait_for_url(re.compile(r"/encounters/[0-9a-f-]+#burn-center$"))
     for _ in range(120):
         if page.locator("[data-transfer-state='delivered']").count():
             break
@@ -389,7 +399,7 @@ def test_markup_is_text_forged_writes_are_refused_and_roles_see_what_they_may_do
     assert page.locator("form.region-editor").count() == 0
     page.goto(page.url.split("/burn-chart")[0])
     assert page.get_by_role("button", name="Accept").count() == 0
-    assert page.get_by_role("button", name="Send to the burn center").count() == 0
+    assert page.get_by_role("link", name="Send to the burn center…").count() == 0
     page.goto(clinic + "/admin")
     assert "Not allowed" in page.inner_text("main") or "403" in page.inner_text("main")
     shot(page, "21-nurse-admin-refused")

@@ -7,11 +7,14 @@ import msgspec
 from base.accounts.permissions import Principal, require_read
 from base.storage import records as store
 from gateway.documents.reports import ReportService
+from gateway.records.snapshot import current_snapshot
 from gateway.storage.database import Database
+from gateway.transfers.send_preview import SendPreview, grouped
 from schemas.accounts import Role
 from schemas.config import Config
 from schemas.encounter_snapshot import EncounterSnapshot
-from schemas.errors import Forbidden
+from schemas.errors import Conflict, Forbidden
+from schemas.patient import SharingConsent
 from schemas.records import Record, RecordKind
 from schemas.transfer import OutboxEntry, SyncStatus
 from schemas.wound_healing import PatientHealing
@@ -33,8 +36,19 @@ class TransferService:
         if who.role not in SENDERS:
             raise Forbidden("only a clinician may send a case to the burn center")
         require_read(who, RecordKind.encounter)
-        store.get_head(self.db.connection(), RecordKind.encounter, encounter_id)  # NotFound before anything else
+        encounter = store.get_head(self.db.connection(), RecordKind.encounter, encounter_id)  # NotFound first
+        if encounter.value().sharing_consent is SharingConsent.refused:
+            raise Conflict("the patient refused that this case be sent: it stays at the clinic", current=encounter)
         return self.queue(encounter_id, who.username, who)
+
+    def preview(self, who: Principal, encounter_id: str) -> SendPreview:
+        """To whom the case would go and what it would carry now (nothing is queued)."""
+        if who.role not in SENDERS:
+            raise Forbidden("only a clinician may send a case to the burn center")
+        self.sync.keys()  # a clinic not linked to a center says so
+        read = current_snapshot(self.db, self.config, encounter_id, who.username)
+        center, parts = self.sync.outbox.preview(read)
+        return SendPreview(center=center, groups=grouped(parts), consent=read.encounter.value.sharing_consent)
 
     def queue(self, encounter_id: str, by: str, who: Principal | None = None) -> OutboxEntry:
         """Read the encounter once and queue it with the report and the wounds' healing made from that reading:

@@ -80,6 +80,13 @@ def when(value: str | dt.datetime | None, clock: ClinicClock | None = None) -> s
     return (clock or ClinicClock()).local(moment).strftime("%Y-%m-%d %H:%M %Z").strip()
 
 
+def size(value: int) -> str:
+    """Bytes as people read them: "840 kB", "11.6 MB"."""
+    if value < 1_000_000:
+        return f"{max(1, round(value / 1000))} kB"
+    return f"{value / 1_000_000:.1f} MB"
+
+
 def number(value: float | None, digits: int = 1, unit: str = "") -> str:
     if value is None:
         return "—"
@@ -98,6 +105,7 @@ def environment(directories: Sequence[Path], clock: ClinicClock | None = None) -
     )
     env.filters["local_time"] = lambda value, with_date=True: local_time(value, with_date, clock)
     env.filters["number"] = number
+    env.filters["size"] = size
     env.filters["when"] = lambda value: when(value, clock)
     env.filters["patient_name"] = patient_name
     env.filters["region_name"] = region_name
