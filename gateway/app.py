@@ -19,7 +19,7 @@ from base.web.pages.assets import static_files
 from base.web.pages.clinic_time import CLOCK_KEY, ClinicClock
 from base.web.pages.pairing_link import APP_PATH_KEY, FINGERPRINT_KEY
 from base.web.pages.protection import csrf_protection, security_headers
-from base.web.pages.rendering import NAV_KEY, SITE_NAME_KEY, template_config
+from base.web.pages.rendering import NAV_KEY, NOTICE_KEY, SITE_NAME_KEY, template_config
 from gateway.analyses.controller import AnalysisController
 from gateway.analyses.model_controller import ModelController
 from gateway.capture.asset_controller import AssetController
@@ -41,6 +41,7 @@ from gateway.scheduler import start_scheduler
 from gateway.site import TEMPLATE_DIRS, page_controllers
 from gateway.storage.database import Database
 from gateway.tls import ensure_ca, fingerprint, https_wanted
+from gateway.transfers.advice_pages import advice_notice
 from gateway.transfers.controller import TransferController
 from gateway.wounds.controller import PatientHealingController, PatientWoundsController, WoundController
 from schemas.config import Config
@@ -97,6 +98,7 @@ def create_app(config: Config, *, start_workers: bool = False) -> Litestar:
                 "services": services,
                 SITE_NAME_KEY: SITE_NAME,
                 NAV_KEY: NAV,
+                NOTICE_KEY: lambda principal: advice_notice(services, principal),
                 CLOCK_KEY: clock,
                 APP_PATH_KEY: f"{APP_PATH}/",
                 FINGERPRINT_KEY: _authority_fingerprint(config),

@@ -312,12 +312,28 @@ def test_the_clinicians_flow_end_to_end_and_the_consultants_advice_back(sites, b
     assert admin.request.get(case_url.replace("/cases/", "/api/v1/cases/")).status == 403
     admin.close()
 
-    page.goto(encounter_url)
+    # At the clinic the advice is counted in the header and on the patient list until someone opens it.
+    page.goto(clinic + "/patients")
+    for _ in range(120):
+        if page.locator("#header-notice").count():
+            break
+        page.wait_for_timeout(500)
+        page.reload()
+    expect(page.locator("#header-notice")).to_contain_text("New advice 1")
+    expect(page.locator("#new-advice")).to_contain_text("Amina Diallo")
+    expect(page.locator("tr:has-text('Amina Diallo') [data-new-advice]")).to_have_text("1 new advice")
+    shot(page, "15-new-advice-on-the-list")
+    page.locator("#new-advice a", has_text="Amina Diallo").click()
     expect(page.locator("#burn-center .advice-text")).to_contain_text("review the wound in 48 h")
+    expect(page.locator("#burn-center [data-new-advice]")).to_have_count(1)
+    assert "1 new: manage locally" in page.inner_text("#encounter-summary")
     shot(page, "15-advice-at-the-clinic")
+    page.goto(clinic + "/patients")
+    assert page.locator("#header-notice").count() == 0 and page.locator("[data-new-advice]").count() == 0
     center.close()
 
     # A full-thickness burn of the forearm as well: the referral becomes urgent, and the summary leads with it.
+    page.goto(encounter_url)
     tab(page, "Burn chart")
     page.locator('a[data-region="lower_arm_left_anterior"]').click()
     page.get_by_label("Full thickness (%)").fill("30")

@@ -35,6 +35,7 @@ def test_migrations_are_recorded_and_applied_once(tmp_path):
         "m009_capture_time_and_attempts",
         "m010_wounds",
         "m011_pictures_set_aside",
+        "m012_advice_read",
     ]
     assert db.migrate() == []
     assert db.connection().execute("PRAGMA journal_mode").fetchone()[0] == "wal"

@@ -58,7 +58,18 @@ def _measurement(view: EncounterView, base: str) -> SummaryLine:
     return SummaryLine(MEASURED, value, f"/analyses/{job}")
 
 
-def encounter_summary(view: EncounterView) -> EncounterSummary:
+def _advice(view: EncounterView, new: int) -> list[SummaryLine]:
+    notes = view.consultations
+    if not notes:
+        return []
+    latest = notes[-1].note
+    fresh = f"{new} new: " if new else ""
+    return [
+        SummaryLine("Burn center advice", f"{fresh}{latest.recommendation.value.replace('_', ' ')}", "#burn-center")
+    ]
+
+
+def encounter_summary(view: EncounterView, new_advice: int = 0) -> EncounterSummary:
     base = f"/encounters/{view.encounter.meta.id}"
     assessment = view.assessment
     tbsa = assessment.tbsa if assessment else None
@@ -70,6 +81,7 @@ def encounter_summary(view: EncounterView) -> EncounterSummary:
         ),
         SummaryLine("Fluids now", fluid_card(assessment).value if assessment else "—", "#assessment"),
         SummaryLine("Referral", referral_card(assessment).value, "#assessment"),
+        *_advice(view, new_advice),
         _measurement(view, base),
     ]
     recorded = view.parts

@@ -35,6 +35,7 @@ from gateway.pages.encounter_view import (
     older_shown,
     older_values,
 )
+from gateway.transfers.advice_pages import read_on_opening
 from schemas.decision_support import RecommendationAct
 from schemas.errors import InvalidInput, NotFound, VersionMismatch
 from schemas.records import RECORD_TYPES, Record, RecordKind
@@ -70,12 +71,14 @@ class EncounterPages(Controller):
     def _overview(self, request, services, encounter_id, status=200, saved="", act_problem=None, act_reason=""):
         """The overview; act_problem: (recommendation key, why the accept or decline was not stored)."""
         view = encounter_view(services, request.user, encounter_id)
+        new_advice = read_on_opening(services, request.user, encounter_id)
         return page(
             request,
             "encounter.html",
             status,
             view=view,
-            summary=encounter_summary(view),
+            summary=encounter_summary(view, len(new_advice)),
+            new_advice=new_advice,
             tab="overview",
             saved=PART_TITLES.get(PART_PAGES.get(saved), "Burn chart" if saved == "burn-chart" else ""),
             part_pages=PART_PAGES,

@@ -16,6 +16,7 @@ from base.web.site import AuthedRequest
 from gateway.dependencies import ServicesDep
 from gateway.pages.common import parse_or_errors, posted_id, service_errors
 from gateway.pages.healing_view import wound_section
+from gateway.transfers.advice_pages import by_patient
 from schemas.accounts import Role
 from schemas.burn_chart import LundBrowderRegion
 from schemas.errors import InvalidInput
@@ -54,7 +55,17 @@ class PatientPages(Controller):
         if q.strip():
             patients = [p for p in patients if _matches(p, q)]
         patients.sort(key=lambda r: r.meta.updated_at, reverse=True)
-        return page(request, "patients.html", patients=patients, q=q, name=patient_name)
+        unread = services.transfers.unread_advice(request.user)
+        names = {p.meta.id: patient_name(p.data) for p in patients}
+        return page(
+            request,
+            "patients.html",
+            patients=patients,
+            q=q,
+            name=patient_name,
+            advice=[(a, names.get(a.patient_id, "a patient")) for a in unread],
+            advice_by_patient=by_patient(unread),
+        )
 
     @get("/patients/new", sync_to_thread=False)
     def new_form(self, request: AuthedRequest) -> Template:

@@ -236,3 +236,26 @@ def m011_pictures_set_aside(db: Database) -> None:
     """A picture set aside by a person (a blurred or wrong shot): why, by whom and when, as JSON of
     schemas.capture.SetAside; NULL while it counts. Nothing is deleted."""
     db.execute("ALTER TABLE assets ADD COLUMN set_aside TEXT")
+
+
+@migrations()
+def m012_advice_read(db: Database) -> None:
+    """Which consultant advice the clinic has read (one row per consultation version, by whom and when): until
+    then it is counted on the header, the patient list and the encounter."""
+    db.execute(
+        """
+        CREATE TABLE advice_read (
+            consultation_id TEXT NOT NULL,
+            version INTEGER NOT NULL,
+            read_by TEXT NOT NULL,
+            read_at TEXT NOT NULL,
+            PRIMARY KEY (consultation_id, version)
+        )
+        """
+    )
+    # Advice already there before this version was read on the pages that showed it: not counted as new.
+    db.execute(
+        "INSERT INTO advice_read (consultation_id, version, read_by, read_at)"
+        " SELECT c.id, v.version, 'before the advice count', v.created_at FROM record_heads c"
+        " JOIN record_versions v ON v.seq = c.seq WHERE c.kind = 'consultation'"
+    )

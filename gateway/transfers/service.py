@@ -8,9 +8,12 @@ from base.accounts.permissions import Principal, require_read
 from base.storage import records as store
 from gateway.documents.reports import ReportService
 from gateway.records.snapshot import current_snapshot
+from gateway.storage import advice as advice_store
+from gateway.storage.advice import UnreadAdvice
 from gateway.storage.database import Database
 from gateway.transfers.send_preview import SendPreview, grouped
 from schemas.accounts import Role
+from schemas.base import iso, utcnow
 from schemas.config import Config
 from schemas.encounter_snapshot import EncounterSnapshot
 from schemas.errors import Conflict, Forbidden
@@ -21,6 +24,8 @@ from schemas.wound_healing import PatientHealing
 from sync.bundle import PartData
 from sync.service import SyncService
 
+READERS = frozenset({Role.clinician, Role.nurse})
+"""Who reads the advice at the clinic: it counts as read once one of them has opened its encounter."""
 SENDERS = frozenset({Role.clinician})
 """Sending a patient's record off site is the treating clinician's decision."""
 
@@ -76,6 +81,22 @@ class TransferService:
         conn = self.db.connection()
         store.get_head(conn, RecordKind.encounter, encounter_id)
         return store.list_heads(conn, RecordKind.consultation, parent_id=encounter_id, limit=None)
+
+    def unread_advice(self, who: Principal) -> list[UnreadAdvice]:
+        """Consultant advice the clinic has not read yet (none for those who do not read patients' records)."""
+        if who.role not in READERS:
+            return []
+        with self.db.read() as conn:
+            return advice_store.unread(conn)
+
+    def mark_advice_read(self, who: Principal, encounter_id: str) -> int:
+        """The encounter's advice as read by `who` (it was shown to them); how many were new."""
+        if who.role not in READERS:
+            return 0
+        with self.db.write() as conn:
+            new = [a for a in advice_store.unread(conn) if a.encounter_id == encounter_id]
+            advice_store.mark_read(conn, new, who.username, iso(utcnow()))
+        return len(new)
 
     def status(self, who: Principal) -> SyncStatus:
         _require_staff(who, "the link to the burn center")

@@ -30,6 +30,16 @@ SITE_NAME_KEY = "site_name"
 """app.state key: "Clinic gateway" or "Burn center", shown in every page's header."""
 NAV_KEY = "nav"
 """app.state key: the header's links, a list of NavItem."""
+NOTICE_KEY = "header_notice"
+"""app.state key: a function of the signed-in principal giving the header's notice (a HeaderNotice, or None),
+shown beside the menu on every page, e.g. the count of advice not read yet."""
+
+
+@dataclass(frozen=True)
+class HeaderNotice:
+    label: str
+    count: int
+    href: str
 
 
 @dataclass(frozen=True)
@@ -134,9 +144,15 @@ def page(request: Request, template: str, status_code: int = 200, **context: Any
             "site_name": request.app.state.get(SITE_NAME_KEY, "burnedge"),
             "path": request.url.path,
             "nav": request.app.state.get(NAV_KEY, []),
+            "notice": _notice(request, principal),
             **context,
         },
     )
+
+
+def _notice(request: Request, principal: Principal | None) -> HeaderNotice | None:
+    notice = request.app.state.get(NOTICE_KEY)
+    return notice(principal) if notice is not None and principal is not None else None
 
 
 def svg(markup: str) -> Markup:
