@@ -81,3 +81,16 @@ class Encounter(Message):
     """Weight at this visit; overrides the patient's recorded weight for calculators."""
     sharing_consent: SharingConsent | None = None
     """Consent to send this encounter's record and pictures to a burn center for advice (asked for when sending)."""
+
+
+def display_name(data: dict) -> str:
+    """How people name a patient from the stored record: given and family name; else the unknown patient's
+    temporary label; else the record number; "Unnamed patient" only for records stored before one was required."""
+    name = " ".join(p for p in (data.get("given_name", ""), data.get("family_name", "")) if p)
+    if name:
+        return name
+    if label := data.get("temporary_label"):
+        return f"{label} (unknown patient)"
+    if number := data.get("medical_record_number"):
+        return f"Record {number}"
+    return "Unnamed patient"

@@ -129,6 +129,9 @@ class CaseSummary(Frozen):
     wounds: list[CaseWound] = []
     """The patient's live wounds, oldest first; empty for a patient with none (and in bundles sent before wounds
     were kept). An analysis without a wound counts for the patient's only wound."""
+    patient_name: str = ""
+    """How the clinic names the patient (the name, an unknown patient's temporary label or the record number), for
+    the consultant's case list; empty in bundles from clinics before it was sent."""
 
 
 class BundleManifest(Frozen):

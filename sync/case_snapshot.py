@@ -18,6 +18,7 @@ from schemas.clinical_results import Assessment, ReferralTier
 from schemas.config import Config
 from schemas.encounter_snapshot import AnalysisVisit, EncounterSnapshot
 from schemas.jobs import BurnAnalysis
+from schemas.patient import display_name
 from schemas.records import EncounterRecord
 from schemas.transfer import BundleManifest, CaseSummary, CaseWound, Urgency
 from sync.bundle import PartData
@@ -82,6 +83,7 @@ def summarize(snap: EncounterSnapshot) -> CaseSummary:
         area_cm2=latest.result.metrics.area_cm2 if latest else None,
         analysis_confidence=latest.result.confidence.level if latest and latest.result.confidence else None,
         wounds=_case_wounds(snap),
+        patient_name=display_name(snap.patient.record.data),
     )
 
 

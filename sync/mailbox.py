@@ -52,8 +52,25 @@ def open_note(envelope: SignedEnvelope, center: SiteIdentity, own: SiteKeys) -> 
     return message.seq, msgspec.json.decode(plain, type=ConsultationNote)
 
 
+ACK_ASKS = 3
+"""Asks after the first while notes keep coming: each names the last note stored, which is the center's receipt,
+so a consultant sees the advice delivered once the clinic stored it, not a sync round later."""
+
+
 def fetch(session, link: Keys, db: Database, keys: SiteKeys, center: SiteIdentity, config: Config) -> int:
-    """Ask the center for new notes and store them; returns how many were new."""
+    """Ask the center for new notes and store them, then ask again (the receipt) while any came; returns how
+    many were new."""
+    new = 0
+    for _ in range(1 + ACK_ASKS):
+        before = sync_state.mail_cursor(db.connection(), center.site_id)
+        new += _ask(session, link, db, keys, center, config)
+        if sync_state.mail_cursor(db.connection(), center.site_id) == before:
+            break  # nothing stored moved the cursor: the center already has the receipt
+    return new
+
+
+def _ask(session, link: Keys, db: Database, keys: SiteKeys, center: SiteIdentity, config: Config) -> int:
+    """One mail request naming the last note stored; how many notes were new."""
     after = sync_state.mail_cursor(db.connection(), center.site_id)
     ask = keys.sign(
         "mail-request", MailRequest(site_id=keys.site_id, center_id=center.site_id, after=after, sent_at=iso(utcnow()))

@@ -106,6 +106,7 @@ def test_the_case_list_shows_the_received_case_by_urgency_with_its_clinic_and_ag
     assert page.status_code == 200
     assert f'href="{pair.case_url}"' in page.text
     assert "Test field clinic" in page.text and "min ago" in page.text
+    assert "&lt;script&gt;alert(1)&lt;/script&gt;" in page.text and NAME not in page.text  # by the patient's name
     assert "badge-urgent" in page.text and ">immediate<" in page.text  # full thickness: an immediate referral
     assert "17.8 %" in page.text and "18.4 cm²" in page.text  # %TBSA 13 + 4.75, and the 3D area
     assert 'href="/cases?include_superseded=true"' in page.text
@@ -187,8 +188,7 @@ def test_advice_written_through_the_form_is_listed_and_followed_to_its_delivery(
     assert "Advice written" in page and "Transfer today; keep the patient warm." in page
     assert 'data-note-state="queued"' in page and "Dr Consultant" in page
     assert pair.note_count() == before + 1
-    pair.sync_round()  # the clinic fetches the note
-    pair.sync_round()  # and says it stored it
+    pair.sync_round()  # the clinic fetches the note, stores it and says so in the same round
     assert 'data-note-state="delivered"' in consultant.get(pair.case_url).text
     assert ">written<" in consultant.get("/cases").text
 

@@ -24,6 +24,7 @@ from base.web.pages.forms_fields import errors_in
 from base.web.pages.referral_card import TIER_WORDS, referral_card
 from base.web.pages.session import request_csrf_token
 from schemas.burn_chart import region_name
+from schemas.patient import display_name
 
 BASE_TEMPLATES = Path(__file__).resolve().parents[1] / "templates"
 SITE_NAME_KEY = "site_name"
@@ -51,16 +52,8 @@ class NavItem:
 
 
 def patient_name(data: dict) -> str:
-    """How a patient is named on every page: given and family name; else the unknown patient's temporary label;
-    else the record number; "Unnamed patient" only for records stored before a name or label was required."""
-    name = " ".join(p for p in (data.get("given_name", ""), data.get("family_name", "")) if p)
-    if name:
-        return name
-    if label := data.get("temporary_label"):
-        return f"{label} (unknown patient)"
-    if number := data.get("medical_record_number"):
-        return f"Record {number}"
-    return "Unnamed patient"
+    """How a patient is named on every page (schemas.patient.display_name)."""
+    return display_name(data)
 
 
 def clinic_clock(request: Request) -> ClinicClock:
