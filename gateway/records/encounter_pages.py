@@ -11,6 +11,7 @@ from litestar.params import QueryParameter
 from litestar.response import Redirect, Template
 
 from base.web.pages.forms import FormBody, form_fields
+from base.web.pages.forms_fields import with_warnings
 from base.web.pages.rendering import clinic_clock, page
 from base.web.paths import IdPath
 from base.web.site import AuthedRequest
@@ -36,6 +37,8 @@ from gateway.pages.encounter_view import (
     older_values,
 )
 from gateway.transfers.advice_pages import read_on_opening
+from processing.clinical.assessment import age_at_injury
+from processing.clinical.vital_ranges import unusual_vitals
 from schemas.decision_support import RecommendationAct
 from schemas.errors import InvalidInput, NotFound, VersionMismatch
 from schemas.records import RECORD_TYPES, Record, RecordKind
@@ -96,7 +99,10 @@ class EncounterPages(Controller):
         if record is None:
             fields = form_fields(struct, raw={"assessed_at": clock.now_input()}, skip=skip, clock=clock)
         else:
-            fields = form_fields(struct, value=msgspec.convert(record.data, struct), skip=skip, clock=clock)
+            value = msgspec.convert(record.data, struct)
+            fields = with_warnings(
+                form_fields(struct, value=value, skip=skip, clock=clock), _unusual(kind, value, encounter, patient)
+            )
         return self._form(request, encounter, patient, slug, kind, fields, record, {}, None, 200)
 
     @post("/parts/{slug:str}", sync_to_thread=True, status_code=303)
@@ -109,8 +115,28 @@ class EncounterPages(Controller):
         version = posted_version(data)
         stored = _stored(services, request.user, kind, encounter_id) if older_fields(kind) else None
         fixed = {"encounter_id": encounter_id, **older_values(kind, stored.data if stored else None)}
+        confirmed = posted_text(data, CONFIRM) == "yes"
+        data = {name: value for name, value in data.items() if name != CONFIRM}  # not a field of the part
         body, errors = parse_or_errors(struct, data, fixed, clock.tz)
         conflict = None
+        unusual = _unusual(kind, body, encounter, patient) if not errors else {}
+        if unusual and not confirmed:
+            fields = with_warnings(form_fields(struct, raw=data, skip=skip, clock=clock), unusual)
+            return self._form(
+                request,
+                encounter,
+                patient,
+                slug,
+                kind,
+                fields,
+                None,
+                {},
+                None,
+                422,
+                posted_version=version,
+                kept=stored,
+                unusual=True,
+            )
         if not errors:
             try:
                 save_part(services, request.user, kind, encounter_id, body, version)
@@ -164,6 +190,7 @@ class EncounterPages(Controller):
         status,
         posted_version=None,
         kept: Record | None = None,
+        unusual: bool = False,
     ):
         """The part's form page; `kept`: the stored record whose older fields are shown read-only (default: record)."""
         version = record.meta.version if record is not None else (posted_version or 0)
@@ -184,6 +211,7 @@ class EncounterPages(Controller):
             conflict=conflict,
             tab=slug,
             may_edit=may_write(request.user, kind),
+            unusual=unusual,
         )
 
     @post("/recommendations", sync_to_thread=True, status_code=303)
@@ -204,3 +232,18 @@ class EncounterPages(Controller):
                 problem = exc.detail
         key, reason = posted_text(data, "key"), posted_text(data, "reason")
         return self._overview(request, services, encounter_id, status, act_problem=(key, problem), act_reason=reason)
+
+
+CONFIRM = "confirm_unusual"
+"""The checkbox by which the clinician says the values marked unusual are right."""
+
+
+def _unusual(kind: RecordKind, value, encounter: Record, patient: Record) -> dict[str, str]:
+    """Warnings for vital signs outside the usual range for the patient's age (primary survey only)."""
+    if kind is not RecordKind.primary_survey or value is None:
+        return {}
+    try:
+        age = age_at_injury(patient.value(), encounter.value())
+    except InvalidInput:
+        age = None
+    return unusual_vitals(value, age)

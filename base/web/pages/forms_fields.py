@@ -41,6 +41,9 @@ class FormField(msgspec.Struct, frozen=True, kw_only=True):
     """The text the input shows; a bool for a checkbox."""
     help: str | None = None
     error: str | None = None
+    warning: str | None = None
+    """A value that is allowed but unusual (a vital sign outside the range for the patient's age): shown beside
+    the field; saved once the person confirms it."""
     children: list[FormField] = []
     """A group's fields."""
     rows: list[list[FormField]] = []
@@ -57,6 +60,7 @@ class FormField(msgspec.Struct, frozen=True, kw_only=True):
     def described_by(self) -> str:
         """The ids of the help and the error, for aria-describedby ("" when there are none)."""
         ids = ([f"{self.id}-help"] if self.help else []) + ([f"{self.id}-error"] if self.error else [])
+        ids += [f"{self.id}-warning"] if self.warning else []
         return " ".join(ids)
 
 
@@ -200,3 +204,15 @@ def errors_in(fields: list[FormField], context: str = "") -> list[FormField]:
         for n, row in enumerate(f.rows, start=1):
             out += errors_in(row, context if f.scalar_rows else f"{label}, row {n}: ")
     return out
+
+
+def with_warnings(fields: list[FormField], warnings: Mapping[str, str]) -> list[FormField]:
+    """The fields with each warning (by field name) set beside its field, groups included."""
+    if not warnings:
+        return fields
+    return [
+        msgspec.structs.replace(
+            f, warning=warnings.get(f.name, f.warning), children=with_warnings(f.children, warnings)
+        )
+        for f in fields
+    ]
