@@ -363,7 +363,8 @@ def test_the_clinicians_flow_end_to_end_and_the_consultants_advice_back(sites, b
         assert urgent.count() >= 1 and "Referral" in urgent.first.inner_text()
         last = urgent.last.bounding_box()
         assert last["y"] + last["height"] <= height, f"the urgent recommendations start below a {width} px screen"
-        shot(page, f"12-encounter-first-screen-{width}", full_page=False)
+        phone_image = "page-encounter-phone.png" if width == PHONE[0] else None
+        shot(page, f"12-encounter-first-screen-{width}", full_page=False, readme=phone_image)
     assert not misfits, "pages that do not fit their screen:\n" + "\n".join(f"{k}: {v}" for k, v in misfits.items())
     page.set_viewport_size({"width": DESKTOP[0], "height": DESKTOP[1]})
     assert not problems, f"the browser reported errors: {problems}"
