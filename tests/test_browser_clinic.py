@@ -365,6 +365,13 @@ def test_the_clinicians_flow_end_to_end_and_the_consultants_advice_back(sites, b
         assert last["y"] + last["height"] <= height, f"the urgent recommendations start below a {width} px screen"
         phone_image = "page-encounter-phone.png" if width == PHONE[0] else None
         shot(page, f"12-encounter-first-screen-{width}", full_page=False, readme=phone_image)
+    # Lists grow with "Add another", not as numbered empty rows.
+    page.goto(encounter_url + "/parts/intake")
+    medications = page.locator("#field-medications")
+    assert medications.locator(":scope > fieldset.field-list-row:visible").count() == 1
+    assert medications.locator("legend").nth(1).inner_text() == "Medication 1"
+    medications.get_by_role("button", name="Add another medication").click()
+    assert medications.locator(":scope > fieldset.field-list-row:visible").count() == 2
     assert not misfits, "pages that do not fit their screen:\n" + "\n".join(f"{k}: {v}" for k, v in misfits.items())
     page.set_viewport_size({"width": DESKTOP[0], "height": DESKTOP[1]})
     assert not problems, f"the browser reported errors: {problems}"

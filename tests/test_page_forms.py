@@ -144,7 +144,7 @@ def test_the_form_comes_back_with_what_was_typed_and_the_messages():
     html = render(fields)
     assert "<script>" not in html and "&lt;script&gt;alert(1)&lt;/script&gt;" in html
     assert 'id="field-medications-0-name-error"' in html and 'aria-invalid="true"' in html
-    assert 'href="#field-medications-0-name">Medications, row 1: Name: is required' in html
+    assert 'href="#field-medications-0-name">Medication 1: Name: is required' in html
 
 
 def test_service_errors_in_json_paths_land_on_their_inputs():

@@ -50,6 +50,11 @@ class FormField(msgspec.Struct, frozen=True, kw_only=True):
     """A list's rows (each a list of fields), blank rows to add more at the end."""
     scalar_rows: bool = False
     """A list of plain values: each row is one field, labelled with its row number."""
+    item_label: str = ""
+    """A list's item in the singular ("Medication"): its rows are "Medication 1", "Medication 2"."""
+    blank_from: int = 0
+    """The index of the list's first blank row (rows from it on are there to add more; a script shows one at a
+    time behind an "Add another" button)."""
     zone_offset: int | None = None
     """On a datetime read in the clinic's zone: its offset from UTC in minutes (east positive), which the page's
     script compares with the phone's to say when the phone is set to another zone."""
@@ -83,7 +88,7 @@ def form_fields(
     raw: Any = None,
     errors: Mapping[str, str] | None = None,
     skip: Collection[str] = frozenset(),
-    blank_rows: int = 2,
+    blank_rows: int = 4,
     tz: dt.tzinfo | None = None,
     id_prefix: str = "field",
     clock: ClinicClock | None = None,
@@ -180,9 +185,21 @@ def _list_field(spec: FieldSpec, name: str, ctx: _Context, common: dict[str, Any
         if item.kind == "group":
             rows.append(_fields(item.children, head + ".", row_ctx))
         else:
-            label = f"{spec.label} {i + 1}"
+            label = f"{singular(spec.label)} {i + 1}"
             rows.append([msgspec.structs.replace(_field(item, head, row_ctx), label=label)])
-    return FormField(**common, rows=rows, scalar_rows=item.kind != "group")
+    return FormField(
+        **common, rows=rows, scalar_rows=item.kind != "group", item_label=singular(spec.label), blank_from=count
+    )
+
+
+def singular(label: str) -> str:
+    """ "Medications" -> "Medication", "Significant comorbidities" -> "Significant comorbidity": how one row of a
+    list is named."""
+    if label.endswith("ies"):
+        return label[:-3] + "y"
+    if label.endswith("s") and not label.endswith("ss"):
+        return label[:-1]
+    return label
 
 
 def encode_row(item: FieldSpec, head: str, tz: dt.tzinfo | None) -> dict[str, list[str]]:
@@ -193,8 +210,8 @@ def encode_row(item: FieldSpec, head: str, tz: dt.tzinfo | None) -> dict[str, li
 
 
 def errors_in(fields: list[FormField], context: str = "") -> list[FormField]:
-    """Every field with an error, depth first, labelled with where it is ("Medications, row 2: Name"), for an
-    error summary."""
+    """Every field with an error, depth first, labelled with where it is ("Medication 2: Name"), for an error
+    summary."""
     out = []
     for f in fields:
         label = f"{context}{f.label}"
@@ -202,7 +219,7 @@ def errors_in(fields: list[FormField], context: str = "") -> list[FormField]:
             out.append(msgspec.structs.replace(f, label=label))
         out += errors_in(f.children, f"{label}: ")
         for n, row in enumerate(f.rows, start=1):
-            out += errors_in(row, context if f.scalar_rows else f"{label}, row {n}: ")
+            out += errors_in(row, context if f.scalar_rows else f"{context}{f.item_label} {n}: ")
     return out
 
 

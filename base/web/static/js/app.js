@@ -70,3 +70,37 @@ if (menuButton) {
     menuButton.setAttribute("aria-expanded", String(open));
   });
 }
+
+// A list (medications, allergies, comorbidities) shows one blank row; "Add another" shows the next. Without this
+// script every blank row is shown, and a row left blank is dropped when the form is saved.
+function listRows(root) {
+  root.querySelectorAll("fieldset.field-list").forEach((list) => {
+    if (list.dataset.rowsReady) {
+      return;
+    }
+    list.dataset.rowsReady = "1";
+    const blank = Array.from(list.querySelectorAll(":scope > [data-blank-row]"));
+    if (blank.length < 2) {
+      return;
+    }
+    blank.slice(1).forEach((row) => (row.hidden = true));
+    const add = document.createElement("button");
+    add.type = "button";
+    add.className = "secondary add-row";
+    add.textContent = `Add another ${(list.dataset.item || "row").toLowerCase()}`;
+    add.addEventListener("click", () => {
+      const next = blank.find((row) => row.hidden);
+      if (next) {
+        next.hidden = false;
+        const first = next.querySelector("input, select, textarea");
+        if (first) {
+          first.focus();
+        }
+      }
+      add.hidden = !blank.some((row) => row.hidden);
+    });
+    list.appendChild(add);
+  });
+}
+listRows(document);
+document.addEventListener("htmx:load", (event) => listRows(event.target));
