@@ -1,16 +1,22 @@
 """Pictures and analyses belong to a wound, over the real app (no worker runs the analyses queued here): the tus
-upload's wound, moving a picture, and which wound an analysis request means or why it is refused."""
+upload's wound, moving a picture, and which wound an analysis request means or why it is refused; a picture set
+aside (it stops counting, is kept and can be put back) and the pictures page's order."""
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
+import numpy as np
 import pytest
 
+from base.storage import assets as asset_rows
+from base.storage import audit
 from harness.bodies import encounter_body, patient_body, wound_body
 from schemas.config import Config, GatewayConfig, JobsConfig
 from tests.capture_images import jpeg, scene
 from tests.conftest import FAST_SECURITY
+from tests.pages_helpers import post_form, sign_in
 from tests.test_uploads import TUS, meta, send
 
 VIEWS = 5
@@ -125,3 +131,68 @@ def test_a_wound_of_another_patient_is_refused_on_upload_and_on_a_picture(client
     assert moved.status_code == 422 and asset_ids(client, auth, enc) == {picture: None}
     unknown = client.put(f"/api/v1/assets/{picture}/wound", json={"wound_id": "nope"}, headers=auth["nurse"])
     assert unknown.status_code == 400  # not an id at all: the schema's answer
+
+
+# A picture set aside with a reason no longer counts: not among the views for readiness, not chosen for an analysis,
+# not in the case sent; it is kept, audited, and can be put back.
+
+
+def _readiness(client, auth, enc) -> dict:
+    return client.get(f"/api/v1/encounters/{enc}/capture-readiness", headers=auth["nurse"]).json()
+
+
+def test_a_picture_set_aside_stops_counting_is_kept_and_can_be_put_back(client, auth, visit, services):
+    enc = visit["encounter"]["id"]
+    for seed in range(VIEWS + 1):
+        assert upload(client, auth, enc, seed).status_code == 201
+    first = next(iter(asset_ids(client, auth, enc)))
+    assert _readiness(client, auth, enc)["views"] == VIEWS + 1
+
+    empty = client.post(f"/api/v1/assets/{first}/set-aside", json={"reason": "  "}, headers=auth["nurse"])
+    assert empty.status_code == 422 and "say why" in empty.json()["detail"]
+    aside = client.post(f"/api/v1/assets/{first}/set-aside", json={"reason": "blurred"}, headers=auth["nurse"])
+    assert aside.status_code == 200, aside.text
+    assert aside.json()["set_aside"]["reason"] == "blurred" and aside.json()["set_aside"]["by"]
+    assert _readiness(client, auth, enc)["views"] == VIEWS
+    assert first in asset_ids(client, auth, enc)  # kept
+    with services.db.read() as conn:
+        assert first not in [p.id for p in asset_rows.encounter_photos(conn, enc, 100)]  # not in the case sent
+        actions = [(e.action, e.detail) for e in audit.entries(conn) if e.record_id == first]
+    assert ("asset.set_aside", "blurred") in actions
+
+    named = analyse(client, auth, enc, {"assets": list(asset_ids(client, auth, enc))})
+    assert named.status_code == 422 and "set aside" in named.json()["detail"]
+    job = analyse(client, auth, enc, {})
+    assert job.status_code == 202 and job.json()["pictures"] == VIEWS
+
+    back = client.delete(f"/api/v1/assets/{first}/set-aside", headers=auth["nurse"])
+    assert back.status_code == 200 and back.json()["set_aside"] is None
+    assert _readiness(client, auth, enc)["views"] == VIEWS + 1
+
+
+def test_the_pictures_page_puts_the_upload_first_then_retakes_then_usable_then_set_aside(client, auth, visit):
+    enc = visit["encounter"]["id"]
+    for seed in range(3):
+        assert upload(client, auth, enc, seed).status_code == 201
+    grey = jpeg(np.full((480, 640, 3), 128, np.uint8))
+    headers = {**auth["nurse"], **TUS, "Upload-Length": str(len(grey))}
+    created = client.post("/api/v1/uploads", headers={**headers, "Upload-Metadata": meta(encounter_id=enc)})
+    assert send(client, auth["nurse"], created.headers["location"], grey).status_code == 204
+    sign_in(client, "nurse")
+    url = f"/encounters/{enc}/pictures"
+    first = next(iter(asset_ids(client, auth, enc)))
+    r = post_form(client, f"/pictures/{first}/set-aside", {"reason": "wrong patient"}, from_page=url)
+    assert r.status_code == 303
+    page = client.get(url).text
+    order = [page.index(anchor) for anchor in ('id="upload-heading"', 'id="readiness"', 'id="photos-usable"')]
+    assert order == sorted(order)
+    assert "Set aside (1): not counted, kept" in page and "wrong patient" in page
+    assert "1 set aside, not counted." in page
+    assert page.index('id="photos-usable"') < page.index('id="photos-aside"')
+    retake = page.index('id="photos-retake"')  # the featureless grey picture: the gate refused it
+    assert page.index('id="readiness"') < retake < page.index('id="photos-usable"')
+    assets = client.get(f"/api/v1/encounters/{enc}/assets", headers=auth["nurse"]).json()
+    refused = [a for a in assets if not a["verdict"]["accepted"] and a["set_aside"] is None]
+    assert len(refused) >= 1 and f"To take again ({len(refused)})" in page
+    aside_section = page[page.index('id="photos-aside"') :]
+    assert re.search(rf'action="/pictures/{first}/put-back"', aside_section)
