@@ -31,6 +31,7 @@ from gateway.documents.report_controller import ReportController
 from gateway.https_gate import PlainHttpGate
 from gateway.jobs.supervisor import Workers
 from gateway.pages import NAV, SITE_NAME
+from gateway.pages.advice import advice_notice
 from gateway.phones.app_routes import APP_PATH, CompanionAppController
 from gateway.phones.controller import SyncController
 from gateway.reactions import ANALYSIS_STORED
@@ -41,7 +42,6 @@ from gateway.scheduler import start_scheduler
 from gateway.site import TEMPLATE_DIRS, page_controllers
 from gateway.storage.database import Database
 from gateway.tls import ensure_ca, fingerprint, https_wanted
-from gateway.transfers.advice_pages import advice_notice
 from gateway.transfers.controller import TransferController
 from gateway.wounds.controller import PatientHealingController, PatientWoundsController, WoundController
 from schemas.config import Config

@@ -170,8 +170,8 @@ def _check_patient_page(out: str, db) -> None:
             assert page.locator("section[aria-labelledby=encounters-heading] tbody tr").count() == 4
             assert page.locator("#healing figure.plot svg").count() >= 3
             assert page.locator("#healing h3[id^=wound-heading]").all_inner_texts() == [
-                "right forearm (lower arm right posterior)",
-                "left shin (lower leg left anterior)",
+                "right forearm (Right forearm, back)",
+                "left shin (Left lower leg, front)",
             ]
             page.locator("model-viewer").first.scroll_into_view_if_needed()
             deadline = time.monotonic() + 90

@@ -98,8 +98,8 @@ def test_an_injury_changed_on_the_phone_and_at_the_gateway_is_settled_by_the_nur
     conflict.wait_for()
     assert "by nurse" in conflict.inner_text()
     rows = conflict.locator("tbody tr").all_inner_texts()
-    assert [row.split("\t") for row in rows] == [["type", "flame", "contact"]]
-    assert "Changed only at the gateway, kept either way: enclosed space yes" in conflict.inner_text()
+    assert [row.split("\t") for row in rows] == [["kind of injury", "flame", "contact"]]  # words, not keys
+    assert "Changed only at the gateway, kept either way: enclosed space: yes" in conflict.inner_text()
     shot(page, "phone-conflict", readme="app-conflict.png")
 
     page.get_by_role("button", name="Keep mine").click()

@@ -16,6 +16,7 @@ from base.web.pages.rendering import clinic_clock, page
 from base.web.paths import IdPath
 from base.web.site import AuthedRequest
 from gateway.dependencies import ServicesDep
+from gateway.pages.advice import read_on_opening
 from gateway.pages.common import (
     may_write,
     parse_or_errors,
@@ -36,7 +37,6 @@ from gateway.pages.encounter_view import (
     older_shown,
     older_values,
 )
-from gateway.transfers.advice_pages import read_on_opening
 from processing.clinical.assessment import age_at_injury
 from processing.clinical.vital_ranges import unusual_vitals
 from schemas.decision_support import RecommendationAct

@@ -14,9 +14,9 @@ from base.web.pages.rendering import clinic_clock, page, patient_name
 from base.web.paths import IdPath
 from base.web.site import AuthedRequest
 from gateway.dependencies import ServicesDep
+from gateway.pages.advice import by_patient
 from gateway.pages.common import parse_or_errors, posted_id, service_errors
 from gateway.pages.healing_view import wound_section
-from gateway.transfers.advice_pages import by_patient
 from schemas.accounts import Role
 from schemas.burn_chart import LundBrowderRegion
 from schemas.errors import InvalidInput

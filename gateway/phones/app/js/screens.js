@@ -309,9 +309,20 @@ function photoList(list) {
   })}</ul>`;
 }
 
-const human = (field) => field.replaceAll("_", " ");
+const FIELD_WORDS = { type: "kind of injury", time_of_injury: "time of injury", regions: "regions burned" };
+const human = (field) => FIELD_WORDS[field] || field.replaceAll("_", " ");
 const shown = (value) =>
-  value == null || value === "" ? "not set" : value === true ? "yes" : value === false ? "no" : typeof value === "object" ? JSON.stringify(value) : String(value);
+  value == null || value === ""
+    ? "not set"
+    : value === true
+      ? "yes"
+      : value === false
+        ? "no"
+        : Array.isArray(value)
+          ? value.map(shown).join(", ")
+          : typeof value === "object"
+            ? JSON.stringify(value)
+            : String(value).replaceAll("_", " ");
 
 // A change the gateway refused because someone saved that record first: who and when, each field both changed
 // (the gateway's value beside the phone's), what only the gateway changed, and the nurse's choice.
@@ -324,7 +335,7 @@ function conflictItem(m) {
     <table><thead><tr><th></th><th>Gateway</th><th>This phone</th></tr></thead>
       <tbody>${both.map((k) => html`<tr><th>${human(k)}</th><td>${shown(theirs[k])}</td><td>${shown(m.data?.[k])}</td></tr>`)}</tbody></table>
     ${gatewayOnly.length ? html`<p class="muted">Changed only at the gateway, kept either way:
-      ${gatewayOnly.map((k) => `${human(k)} ${shown(theirs[k])}`).join(", ")}.</p>` : ""}
+      ${gatewayOnly.map((k) => `${human(k)}: ${shown(theirs[k])}`).join("; ")}.</p>` : ""}
     <button type="button" data-keep-theirs="${m.seq}">Use the gateway's</button>
     <button type="button" data-keep-mine="${m.seq}">Keep mine</button></li>`;
 }
