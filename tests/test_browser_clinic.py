@@ -263,7 +263,7 @@ def test_the_clinicians_flow_end_to_end_and_the_consultants_advice_back(sites, b
     sign_in(consultant, sites.center.url, "consult")
     expect(consultant.locator("h1")).to_have_text("Incoming cases")
     shot(consultant, "12-center-cases")
-    consultant.get_by_role("link", name=re.compile("emergency")).first.click()
+    consultant.get_by_role("link", name="Amina Diallo").first.click()  # cases are listed by the patient's name
     consultant.wait_for_load_state()
     expect(consultant.locator("#tbsa-figure .value")).to_have_text("7.1 %")
     assert internal_codes(consultant.inner_text("body")) == [], "the center's case shows codes"
