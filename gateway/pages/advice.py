@@ -23,7 +23,4 @@ def by_patient(unread: list[UnreadAdvice]) -> dict[str, int]:
 
 def read_on_opening(services: Services, principal: Principal, encounter_id: str) -> set[str]:
     """The encounter's advice new to the clinic (shown marked "new" this once), now recorded as read."""
-    new = {a.consultation_id for a in services.transfers.unread_advice(principal) if a.encounter_id == encounter_id}
-    if new:
-        services.transfers.mark_advice_read(principal, encounter_id)
-    return new
+    return services.transfers.mark_advice_read(principal, encounter_id)

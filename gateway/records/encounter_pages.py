@@ -120,24 +120,8 @@ class EncounterPages(Controller):
         body, errors = parse_or_errors(struct, data, fixed, clock.tz)
         conflict = None
         unusual = _unusual(kind, body, encounter, patient) if not errors else {}
-        if unusual and not confirmed:
-            fields = with_warnings(form_fields(struct, raw=data, skip=skip, clock=clock), unusual)
-            return self._form(
-                request,
-                encounter,
-                patient,
-                slug,
-                kind,
-                fields,
-                None,
-                {},
-                None,
-                422,
-                posted_version=version,
-                kept=stored,
-                unusual=True,
-            )
-        if not errors:
+        to_confirm = bool(unusual) and not confirmed
+        if not errors and not to_confirm:
             try:
                 save_part(services, request.user, kind, encounter_id, body, version)
                 return Redirect(path=f"/encounters/{encounter_id}", query_params={"saved": slug}, status_code=303)
@@ -145,7 +129,7 @@ class EncounterPages(Controller):
                 conflict = exc
             except InvalidInput as exc:
                 errors = service_errors(exc)
-        fields = form_fields(struct, raw=data, errors=errors, skip=skip, clock=clock)
+        fields = with_warnings(form_fields(struct, raw=data, errors=errors, skip=skip, clock=clock), unusual)
         if conflict is not None:
             current = conflict.current if isinstance(conflict.current, Record) else None
             return self._form(
@@ -174,6 +158,7 @@ class EncounterPages(Controller):
             422,
             posted_version=version,
             kept=stored,
+            unusual=to_confirm,
         )
 
     def _form(

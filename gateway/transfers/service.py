@@ -89,14 +89,16 @@ class TransferService:
         with self.db.read() as conn:
             return advice_store.unread(conn)
 
-    def mark_advice_read(self, who: Principal, encounter_id: str) -> int:
-        """The encounter's advice as read by `who` (it was shown to them); how many were new."""
+    def mark_advice_read(self, who: Principal, encounter_id: str) -> set[str]:
+        """The encounter's advice as read by `who` (it was shown to them); the consultations that were new."""
         if who.role not in READERS:
-            return 0
-        with self.db.write() as conn:
+            return set()
+        with self.db.read() as conn:  # most openings find nothing new: no write transaction for them
             new = [a for a in advice_store.unread(conn) if a.encounter_id == encounter_id]
-            advice_store.mark_read(conn, new, who.username, iso(utcnow()))
-        return len(new)
+        if new:
+            with self.db.write() as conn:  # INSERT OR IGNORE: read at the same time by two people, kept once
+                advice_store.mark_read(conn, new, who.username, iso(utcnow()))
+        return {a.consultation_id for a in new}
 
     def status(self, who: Principal) -> SyncStatus:
         _require_staff(who, "the link to the burn center")
