@@ -138,13 +138,14 @@ class RegionCharting(Message):
     the region (not of the body). The page turns it into the chart's entries for that region."""
 
     superficial_partial_percent: Percent = 0.0
-    """Superficial partial thickness: % of this region."""
+    """The share of this region, in percent, burned to superficial partial thickness."""
     deep_partial_percent: Percent = 0.0
-    """Deep partial thickness: % of this region."""
+    """The share of this region, in percent, burned to deep partial thickness."""
     full_thickness_percent: Percent = 0.0
-    """Full thickness: % of this region."""
+    """The share of this region, in percent, burned to full thickness."""
     superficial_percent: Percent = 0.0
-    """Superficial (epidermal) only: charted but not counted in %TBSA."""
+    """The share of this region, in percent, with a superficial (epidermal) burn only: charted, but not counted in
+    the %TBSA."""
     circumferential: bool = False
     """The burn goes all the way round (limb or trunk): escharotomy may be needed."""
 

@@ -78,9 +78,11 @@ class Encounter(Message):
     """Name of the responsible clinician as written on the chart."""
     facility: ShortText | None = None
     weight_kg: WeightKg | None = None
-    """Weight at this visit; overrides the patient's recorded weight for calculators."""
+    """Weight at this visit: the calculations for this visit (fluid volumes, body surface area) use it instead of the
+    weight on the patient's record."""
     sharing_consent: SharingConsent | None = None
-    """Consent to send this encounter's record and pictures to a burn center for advice (asked for when sending)."""
+    """Whether the patient agreed to this visit's record and pictures being sent to a burn center for advice (also
+    asked when the case is sent)."""
 
 
 def display_name(data: dict) -> str:

@@ -62,12 +62,15 @@ class Intake(Message):
     allergies: list[Allergy] = []
     no_known_allergies: bool = False
     tetanus_status: TetanusStatus = TetanusStatus.unknown
-    """The older summary; record tetanus_doses and the last dose instead."""
+    """The older summary of the tetanus history, kept as recorded: the number of tetanus vaccine doses and the date
+    of the last dose are asked for instead."""
     tetanus_doses: TetanusDoses = TetanusDoses.unknown
+    """Doses of tetanus vaccine the patient has had in their life, before this burn; "Unknown" if they cannot say."""
     last_tetanus_dose: dt.date | None = None
-    """Date of the last tetanus-toxoid-containing dose, when known."""
+    """Date of the last dose of a tetanus vaccine (any vaccine with tetanus toxoid), when known."""
     years_since_last_tetanus_dose: Annotated[float, msgspec.Meta(ge=0, le=130)] | None = None
-    """When only "about N years ago" is known; give this or last_tetanus_dose, not both."""
+    """When only roughly how long ago is known ("about 10 years ago"): the years since the last tetanus dose. Give
+    this or the date of the last dose, not both."""
     severe_immunodeficiency: bool | None = None
     """HIV infection or other severe immunodeficiency: changes the tetanus immune globulin advice."""
     social: SocialContext = msgspec.field(default_factory=SocialContext)
@@ -193,7 +196,8 @@ class SecondarySurvey(Message):
     findings: list[Finding] = []
     other_injuries: list[OtherInjury] = []
     burn_poses_greatest_risk: bool | None = None
-    """With concomitant trauma: whether the burn is the greater risk (older ABA wording)."""
+    """When there are other injuries as well as the burn: whether the burn poses the greatest risk to the patient
+    (an older ABA referral criterion)."""
     notes: LongText = ""
 
 
@@ -214,6 +218,7 @@ class MechanismType(enum.StrEnum):
 class Mechanism(Message):
     encounter_id: Id
     type: MechanismType
+    """Low-voltage electrical: below 1000 volts; high-voltage: 1000 volts or more."""
     enclosed_space: bool = False
     duration_s: Annotated[float, msgspec.Meta(ge=0, le=86_400)] | None = None
     """How long the exposure lasted, in seconds."""
@@ -224,13 +229,14 @@ class Mechanism(Message):
     description: LongText = ""
     account_fits_injury: bool | None = None
     """Whether the account of how it happened fits the burn seen (its pattern, depth and site, and the child's
-    stage of development); None: not judged."""
+    stage of development). Leave as not recorded if not judged."""
     child_independently_mobile: bool | None = None
-    """For a child: whether they can move about on their own (crawl, walk); None: not judged or not a child."""
+    """For a child: whether they can move about on their own (crawl, walk). Leave as not recorded if not judged or
+    not a child."""
     pattern_of_concern: bool | None = None
     """A burn pattern that needs an explanation: the shape of an object (cigarette, iron), signs of forced immersion
     (sharp, symmetrical upper limits), or a site not expected to touch a hot object by accident (the backs of the
-    hands, the soles, the buttocks, the back); None: not judged."""
+    hands, the soles, the buttocks, the back). Leave as not recorded if not judged."""
 
 
 class FluidFormula(enum.StrEnum):
@@ -253,4 +259,6 @@ class Resuscitation(Message):
     encounter_id: Id
     formula: FluidFormula = FluidFormula.parkland
     custom_ml_per_kg_per_percent: Annotated[float, msgspec.Meta(gt=0, le=8)] | None = None
+    """With a custom formula only: millilitres of fluid per kilogram of body weight per % of body surface burned."""
     fluid_given: list[FluidGiven] = []
+    """Crystalloid already given: how much, when and which fluid."""

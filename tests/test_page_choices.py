@@ -38,9 +38,11 @@ def test_the_blank_option_says_what_is_saved():
     assert intake["tetanus_doses"].choices[0] == ("", NOT_RECORDED)
     fluids = {f.name: f for f in form_fields(RECORD_TYPES[RecordKind.resuscitation], skip=IDS)}
     assert fluids["formula"].choices[0] == ("", NOT_CHOSEN)
-    assert "Left as not chosen, Parkland is saved." in fluids["formula"].help
+    assert 'Left as not chosen, "Parkland" is saved.' in fluids["formula"].help
     survey = {f.name: f for f in flat(form_fields(RECORD_TYPES[RecordKind.primary_survey], skip=IDS))}
     assert survey["airway.intervention"].choices[0] == ("", NOT_CHOSEN)
+    assert survey["airway.intervention"].choices[1] == ("none", "No intervention")
+    assert 'Left as not chosen, "No intervention" is saved.' in survey["airway.intervention"].help
     assert {f.name: f for f in form_fields(Patient, skip=IDS)}["sex"].choices[0] == ("", NOT_RECORDED)
 
 

@@ -32,13 +32,13 @@ UNITS = {
     "_cm": "(cm)",
     "_c": "(°C)",
     "_ml": "(mL)",
-    "_s": "(s)",
+    "_s": "(seconds)",
     "_mmol_l": "(mmol/L)",
-    "_v": "(V)",
+    "_v": "(volts)",
     "_years": "(years)",
-    "_minutes": "(min)",
+    "_minutes": "(minutes)",
 }
-"""Field-name endings that are units: "spo2_percent" reads "SpO2 (%)"."""
+"""Field-name endings that are units: "spo2_percent" reads "SpO2 (%)"; a unit of one letter is written out."""
 WORDS = {
     "spo2": "SpO2",
     "gcs": "GCS",
@@ -51,6 +51,8 @@ WORDS = {
     "id": "ID",
 }
 """Abbreviations written as clinicians write them."""
+CHOICE_LABELS = {("AirwayIntervention", "none"): "No intervention"}
+"""(enum class name, value) -> a select option's label, where the value made human would read badly."""
 YES, NO = "yes", "no"
 NOT_RECORDED, NOT_CHOSEN, UNKNOWN = "Not recorded", "Not chosen", "unknown"
 """The blank option of a select; UNKNOWN: the default value that means nothing was recorded."""
@@ -171,9 +173,13 @@ def _spec(name: str, t: mi.Type, *, help_text: str | None, has_default: bool, de
         return FieldSpec(**common, kind=kind, min_length=t.min_length, max_length=t.max_length, pattern=t.pattern)
     if isinstance(t, (mi.EnumType, mi.LiteralType)):
         values = [str(m.value) for m in t.cls] if isinstance(t, mi.EnumType) else [str(v) for v in t.values]
-        choices = _choices(values, optional, common["required"], default if has_default and not optional else None)
+        owner = t.cls.__name__ if isinstance(t, mi.EnumType) else ""
+        choices = _choices(
+            values, optional, common["required"], default if has_default and not optional else None, owner
+        )
         if choices[0][1] == NOT_CHOSEN:
-            common["help"] = " ".join(filter(None, [help_text, f"Left as not chosen, {human(str(default))} is saved."]))
+            saved = dict(choices)[str(default)]
+            common["help"] = " ".join(filter(None, [help_text, f'Left as not chosen, "{saved}" is saved.']))
         return FieldSpec(**common, kind="select", choices=choices)
     if isinstance(t, mi.DateType):
         return FieldSpec(**common, kind="date")
@@ -189,11 +195,14 @@ def _spec(name: str, t: mi.Type, *, help_text: str | None, has_default: bool, de
     raise TypeError(f"field {name!r}: a form cannot show {type(t).__name__}")
 
 
-def _choices(values: list[str], optional: bool, required: bool, default: Any) -> tuple[tuple[str, str], ...]:
+def _choices(
+    values: list[str], optional: bool, required: bool, default: Any, owner: str = ""
+) -> tuple[tuple[str, str], ...]:
     """A select's options, a blank one first: no form pre-selects a value the person did not choose. Left blank, an
     optional field is not recorded, a field with a default gets it ("unknown": not recorded), a required one is
     refused."""
-    choices = [(v, REGION_NAMES.get(v) or human(v)) for v in values]  # a region by its name, not its code
+    # a region by its name, not its code
+    choices = [(v, CHOICE_LABELS.get((owner, v)) or REGION_NAMES.get(v) or human(v)) for v in values]
     if optional:
         choices.insert(0, ("", NOT_RECORDED))
     elif required:
