@@ -186,6 +186,7 @@ class OtherInjury(Message):
     description: LongText
     area: BodyArea | None = None
     major: bool = False
+    """A major injury besides the burn (a fracture, for example): concomitant trauma for the referral criteria."""
 
 
 class SecondarySurvey(Message):
