@@ -35,6 +35,7 @@ from base.web.paths import IdPath, SiteIdPath
 from base.web.query import query_struct
 from base.web.site import AuthedRequest
 from center.cases import CaseService
+from center.clinic_links import ClinicLinks
 from center.endpoint import Endpoint
 from center.pages import NAV, SITE_NAME, TEMPLATES, page_controllers
 from center.receiver import Receiver
@@ -78,6 +79,7 @@ class CentralServices:
     accounts: AccountService
     cases: CaseService
     receiver: Receiver
+    clinic_links: ClinicLinks
 
     @classmethod
     def build(cls, config: Config, db: AnyDatabase) -> CentralServices:
@@ -90,6 +92,7 @@ class CentralServices:
             accounts=AccountService(db, config.security),
             cases=CaseService(db, keys, store_dir),
             receiver=Receiver(db, config.central, keys, store_dir),
+            clinic_links=ClinicLinks(db, keys, config.central),
         )
 
     def verify_audit(self, principal: Principal | None) -> AuditVerification:

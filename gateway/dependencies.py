@@ -50,7 +50,7 @@ class Services:
     thumbnails: ThumbnailService
     wounds: WoundService
     run_sync_now: Callable[[], None] = lambda: None
-    """Starts a sync round at once (set by the scheduler when [sync] enabled)."""
+    """Starts a sync round at once if the link is on (set by the scheduler)."""
 
     def verify_audit(self, principal: Principal | None) -> AuditVerification:
         return audit_trail.verify(self.db, principal, self.config)

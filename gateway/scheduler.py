@@ -73,21 +73,21 @@ def start_scheduler(services: Services, workers: Workers | None = None) -> Backg
         max_instances=1,
         next_run_time=utcnow(),
     )
-    if config.sync.enabled:
-        sync = services.transfers.sync
-        scheduler.add_job(
-            sync.scheduled_round,
-            "interval",
-            seconds=config.sync.interval_s,
-            id=SYNC_JOB,
-            coalesce=True,
-            max_instances=1,
-            next_run_time=utcnow(),
-        )
-        # A clinician sending a case: one round now, whatever the backoff (the round lock keeps it single).
-        services.run_sync_now = lambda: scheduler.add_job(
-            sync.scheduled_round, kwargs={"force": True}, id=SYNC_JOB + "-now", replace_existing=True
-        )
+    # Always scheduled: the round itself checks the link, which the Burn center page may enable at any time.
+    sync = services.transfers.sync
+    scheduler.add_job(
+        sync.scheduled_round,
+        "interval",
+        seconds=config.sync.interval_s,
+        id=SYNC_JOB,
+        coalesce=True,
+        max_instances=1,
+        next_run_time=utcnow(),
+    )
+    # A clinician sending a case: one round now, whatever the backoff (the round lock keeps it single).
+    services.run_sync_now = lambda: scheduler.add_job(
+        sync.scheduled_round, kwargs={"force": True}, id=SYNC_JOB + "-now", replace_existing=True
+    )
     scheduler.start()
     return scheduler
 

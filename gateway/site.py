@@ -35,6 +35,7 @@ def page_controllers() -> list:
     from gateway.records.burn_chart_pages import BurnChartPages
     from gateway.records.encounter_pages import EncounterPages
     from gateway.records.patient_pages import PatientPages
+    from gateway.transfers.link_pages import LinkPages
     from gateway.transfers.pages import EncounterSendPages, TransferPages
     from gateway.wounds.pages import WoundPages
 
@@ -49,6 +50,7 @@ def page_controllers() -> list:
         ReportPages,
         EncounterSendPages,
         TransferPages,
+        LinkPages,
         AdminPages,
         PhoneSetupPages,
     ]

@@ -340,6 +340,11 @@ class SyncStatus(Frozen):
     audit_anchor_problem: str | None = None
     """Set when the center refused to anchor the chain: it no longer runs through the entry anchored before
     (entries removed, or the database replaced by an older copy). Run `burnedge audit verify`."""
+    center_endpoints: list[str] = []
+    """Where the rounds reach the center: the Burn center page's setting, else the configuration file's."""
+    link_set_by: str | None = None
+    """Who set the link on the Burn center page (None: it comes from the configuration file)."""
+    link_set_at: str | None = None
 
 
 class SyncRoundState(Frozen):
@@ -354,3 +359,21 @@ class SyncRoundState(Frozen):
     failures: int = 0
     """Rounds failed in a row since the last success."""
     audit_anchor_problem: str | None = None
+
+
+ZENOH_ENDPOINT_PATTERN = r"\A(tcp|tls|quic|udp|ws)/[^\s/]+:\d{1,5}\Z"
+ZenohEndpoint = Annotated[
+    str, msgspec.Meta(pattern=ZENOH_ENDPOINT_PATTERN, examples=["tcp/203.0.113.5:7447", "tls/center.example.org:7447"])
+]
+
+
+class LinkSettings(Frozen):
+    """The link to the burn center as the clinic's administrator set it on the Burn center page. Once set it
+    takes the place of [sync] enabled and center_endpoints, and the next round uses it: no restart."""
+
+    enabled: bool
+    """Send queued cases and fetch the center's advice."""
+    center_endpoints: list[ZenohEndpoint]
+    """Where the burn center listens, as its administrator's page shows it, e.g. "tcp/203.0.113.5:7447"."""
+    set_by: ShortText
+    set_at: str

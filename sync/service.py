@@ -13,13 +13,16 @@ import random
 import threading
 from collections.abc import Callable
 
+import msgspec
+
 from base.folders import keys_dir
+from base.storage import audit
 from base.storage.database import Database
 from schemas.base import iso, utcnow
 from schemas.config import Config
 from schemas.encounter_snapshot import EncounterSnapshot
 from schemas.errors import BurnedgeError
-from schemas.transfer import OutboxEntry, SyncStatus
+from schemas.transfer import LinkSettings, OutboxEntry, SyncStatus
 from sync import peers
 from sync.anchor import anchor_path, load_anchor
 from sync.bundle import PartData
@@ -43,6 +46,36 @@ class SyncService:
     def keys(self) -> SiteKeys:
         return load_keys(keys_dir(self.config))
 
+    def link_settings(self) -> LinkSettings | None:
+        """The link as set on the Burn center page, if it ever was."""
+        return sync_state.link_settings(self.db.connection())
+
+    def set_link(self, settings: LinkSettings, user_id: str | None, device_id: str | None = None) -> None:
+        """Store the link, audited; the next round (scheduled or asked for) uses it."""
+        endpoints = ", ".join(settings.center_endpoints) or "no address"
+        with self.db.write() as conn:
+            sync_state.put_link_settings(conn, settings)
+            # A new link deserves a try now, not after the backoff of the old one's failures.
+            sync_state.put_round_values(conn, {"failures": "0"}, clear=("next_round_at",))
+            audit.append(
+                conn,
+                action="sync.link",
+                user_id=user_id,
+                device_id=device_id,
+                kind="site",
+                detail=f"link {'on' if settings.enabled else 'off'}, burn center at {endpoints}, by {settings.set_by}",
+            )
+
+    def effective_config(self) -> Config:
+        """The configuration with the Burn center page's link in place of [sync] enabled and center_endpoints."""
+        settings = self.link_settings()
+        if settings is None:
+            return self.config
+        sync = msgspec.structs.replace(
+            self.config.sync, enabled=settings.enabled, center_endpoints=list(settings.center_endpoints)
+        )
+        return msgspec.structs.replace(self.config, sync=sync)
+
     def queue(
         self,
         encounter: Callable[[], EncounterSnapshot],
@@ -59,7 +92,7 @@ class SyncService:
         if not self._round_lock.acquire(blocking=False):
             return None
         try:
-            report = Sender(self.db, self.config, self.keys()).run_round()
+            report = Sender(self.db, self.effective_config(), self.keys()).run_round()
         except BurnedgeError as exc:
             self._failed(exc.detail)
             log.warning("sync round failed: %s", exc.detail)
@@ -79,7 +112,10 @@ class SyncService:
         return report
 
     def scheduled_round(self, force: bool = False) -> None:
-        """For the scheduler: a failure is recorded (status, backoff) and logged, never raised."""
+        """For the scheduler, while the link is enabled: a failure is recorded (status, backoff) and logged, never
+        raised."""
+        if not self.effective_config().sync.enabled:
+            return
         try:
             self.run_round(force=force)
         except BurnedgeError:
@@ -93,6 +129,8 @@ class SyncService:
             site_id = self.keys().site_id
         except BurnedgeError:
             site_id = None
+        settings = self.link_settings()
+        config = self.effective_config()
         try:
             center_id = peers.only_center(conn, self.config.sync.center_id).site_id
         except BurnedgeError:
@@ -102,7 +140,7 @@ class SyncService:
         except BurnedgeError:
             kept = None  # audit verify names a damaged anchor; the status only reports a good one
         return SyncStatus(
-            enabled=self.config.sync.enabled,
+            enabled=config.sync.enabled,
             site_id=site_id,
             center_id=center_id,
             queued=counts.queued,
@@ -115,6 +153,9 @@ class SyncService:
             audit_anchored_seq=kept.head.seq if kept else None,
             audit_anchored_at=kept.anchored_at if kept else None,
             audit_anchor_problem=state.audit_anchor_problem,
+            center_endpoints=list(config.sync.center_endpoints),
+            link_set_by=settings.set_by if settings else None,
+            link_set_at=settings.set_at if settings else None,
         )
 
     # backoff state ----------------------------------------------------------------

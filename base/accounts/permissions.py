@@ -45,7 +45,7 @@ PRESCRIPTION_FIELDS = {RecordKind.resuscitation: ("formula", "custom_ml_per_kg_p
 DECIDE = frozenset({Role.clinician})
 # Who may upload photos and videos of a burn (and read them back).
 CAPTURE = frozenset({Role.clinician, Role.nurse})
-ADMIN_ONLY = frozenset({"manage_users", "manage_devices", "read_audit"})
+ADMIN_ONLY = frozenset({"manage_users", "manage_devices", "read_audit", "link_sites"})
 
 
 @dataclass(frozen=True, slots=True)

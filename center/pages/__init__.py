@@ -13,6 +13,7 @@ TEMPLATES = Path(__file__).resolve().parent / "templates"
 SITE_NAME = "Burn center"
 NAV = [
     NavItem("Cases", "/cases", frozenset({Role.consultant.value})),
+    NavItem("Clinics", "/clinics", frozenset({Role.admin.value})),
     NavItem("Admin", "/admin", frozenset({Role.admin.value})),
 ]
 
@@ -21,5 +22,6 @@ def page_controllers() -> list:
     from base.web.pages.admin import AdminPages
     from base.web.pages.sign_in import SignInController
     from center.pages.cases import CasePages
+    from center.pages.clinics import ClinicPages
 
-    return [SignInController, CasePages, AdminPages]
+    return [SignInController, CasePages, ClinicPages, AdminPages]

@@ -1,4 +1,5 @@
-"""The burn-center page: the link's state and every case on its way or delivered (staff and the clinic's IT)."""
+"""The burn-center page (the link's state and every case on its way or delivered, for staff and the clinic's IT)
+and the encounter's confirmation before a case is sent."""
 
 from __future__ import annotations
 
@@ -12,6 +13,7 @@ from base.web.site import AuthedRequest
 from gateway.dependencies import ServicesDep
 from gateway.pages.common import posted_text, posted_version
 from gateway.pages.encounter_view import encounter_header
+from gateway.transfers.link_pages import transfers_page
 from gateway.transfers.send_preview import CONSENT_WORDS, MADE_WHEN_SENT
 from schemas.errors import Conflict, VersionMismatch
 from schemas.patient import SharingConsent
@@ -72,11 +74,7 @@ class TransferPages(Controller):
 
     @get("/", sync_to_thread=False)
     def transfers(self, request: AuthedRequest, services: ServicesDep) -> Template:
-        status = services.transfers.status(request.user)
-        entries = services.transfers.all_transfers(request.user)
-        return page(
-            request, "transfers.html", status=status, entries=entries, asked=bool(request.query_params.get("asked"))
-        )
+        return transfers_page(request, services)
 
     @post("/sync-now", sync_to_thread=True, status_code=303)
     def sync_now(self, request: AuthedRequest, services: ServicesDep) -> Redirect:

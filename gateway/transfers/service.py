@@ -11,6 +11,7 @@ from gateway.records.snapshot import current_snapshot
 from gateway.storage import advice as advice_store
 from gateway.storage.advice import UnreadAdvice
 from gateway.storage.database import Database
+from gateway.transfers.link import LinkService
 from gateway.transfers.send_preview import SendPreview, grouped
 from schemas.accounts import Role
 from schemas.base import iso, utcnow
@@ -35,6 +36,7 @@ class TransferService:
         self.db = db
         self.config = config
         self.sync = SyncService(db, config)
+        self.link = LinkService(db, config, self.sync)
         self.reports = reports
 
     def send(self, who: Principal, encounter_id: str) -> OutboxEntry:

@@ -6,14 +6,20 @@ from __future__ import annotations
 import sqlite3
 from collections.abc import Iterable, Mapping
 
-from schemas.transfer import SyncRoundState
+import msgspec
+
+from schemas.transfer import LinkSettings, SyncRoundState
 
 _MAIL_CURSOR = "mail_after:"
 """Prefix of the keys that hold, per center, the last mailbox message stored; the other keys are the rounds'."""
+_LINK = "link_settings"
+"""The key of the link as set on the Burn center page (a LinkSettings in JSON)."""
 
 
 def round_state(conn: sqlite3.Connection) -> SyncRoundState:
-    rows = conn.execute("SELECT key, value FROM sync_state WHERE key NOT LIKE ?", (f"{_MAIL_CURSOR}%",))
+    rows = conn.execute(
+        "SELECT key, value FROM sync_state WHERE key NOT LIKE ? AND key <> ?", (f"{_MAIL_CURSOR}%", _LINK)
+    )
     values = {r["key"]: r["value"] for r in rows}
     return SyncRoundState(
         last_round_at=values.get("last_round_at"),
@@ -46,4 +52,17 @@ def advance_mail_cursor(conn: sqlite3.Connection, center_id: str, seq: int) -> N
         "INSERT INTO sync_state (key, value) VALUES (?, ?) ON CONFLICT (key) DO UPDATE SET value ="
         " MAX(CAST(value AS INTEGER), CAST(excluded.value AS INTEGER))",
         (f"{_MAIL_CURSOR}{center_id}", str(seq)),
+    )
+
+
+def link_settings(conn: sqlite3.Connection) -> LinkSettings | None:
+    """The link as last set on the Burn center page; None while it was never set there."""
+    row = conn.execute("SELECT value FROM sync_state WHERE key = ?", (_LINK,)).fetchone()
+    return msgspec.json.decode(row["value"], type=LinkSettings) if row else None
+
+
+def put_link_settings(conn: sqlite3.Connection, settings: LinkSettings) -> None:
+    conn.execute(
+        "INSERT INTO sync_state (key, value) VALUES (?, ?) ON CONFLICT (key) DO UPDATE SET value = excluded.value",
+        (_LINK, msgspec.json.encode(settings).decode()),
     )
