@@ -9,7 +9,10 @@ import pytest
 
 from base.storage import audit
 from base.storage import records as store
+from processing.fhir import bundle
+from processing.fhir import record as fhir
 from schemas.accounts import Role
+from schemas.encounter_snapshot import Versioned
 from schemas.records import RecordKind
 from tests.conftest import make_user
 from tests.pages_helpers import post_form, sign_in
@@ -193,6 +196,12 @@ def test_the_api_merges_and_refuses_a_nurse(client, auth, services):
     r = client.post(f"/api/v1/patients/{ids[0]}/merge", json=body, headers=auth["clinician"])
     assert r.status_code == 200, r.text
     assert r.json()["duplicate"]["meta"]["deleted"] is True
+    exported = fhir.patient(Versioned.of(_head(services, RecordKind.patient, ids[1])))
+    bundle.model_of("Patient").model_validate(exported)
+    assert exported["active"] is False
+    assert exported["link"] == [
+        {"other": {"identifier": fhir.record_identifier("patient", ids[0])}, "type": "replaced-by"}
+    ]
     r = client.put(
         f"/api/v1/patients/{ids[0]}",
         json={"id": ids[0], "given_name": "Amina", "merged_into": ids[1]},
