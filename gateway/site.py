@@ -34,6 +34,8 @@ def page_controllers() -> list:
     from gateway.phones.setup_pages import PhoneSetupPages
     from gateway.records.burn_chart_pages import BurnChartPages
     from gateway.records.encounter_pages import EncounterPages
+    from gateway.records.patient_edit_pages import PatientEditPages
+    from gateway.records.patient_merge_pages import PatientMergePages
     from gateway.records.patient_pages import PatientPages
     from gateway.transfers.link_pages import LinkPages
     from gateway.transfers.pages import EncounterSendPages, TransferPages
@@ -42,6 +44,8 @@ def page_controllers() -> list:
     return [
         SignInController,
         PatientPages,
+        PatientEditPages,
+        PatientMergePages,
         WoundPages,
         EncounterPages,
         BurnChartPages,

@@ -44,6 +44,19 @@ class Patient(Message):
     height_cm: HeightCm | None = None
     medical_record_number: ShortText | None = None
     pregnant: bool | None = None
+    merged_into: Id | None = None
+    """Set only on a withdrawn duplicate: the patient (the same person's other record) its encounters and wounds
+    were moved to when the two records were merged (gateway/records/merge.py)."""
+
+
+class PatientMerge(Message):
+    """Merge another record of the same person into this patient (POST /api/v1/patients/{id}/merge): its
+    encounters and wounds move here, and it is withdrawn with the reason."""
+
+    duplicate_id: Id
+    """The other record of the same person: withdrawn by the merge, pointing at this one."""
+    reason: Annotated[str, msgspec.Meta(min_length=1, max_length=200)]
+    """Why the two records are the same person (e.g. "same MRN, registered twice")."""
 
 
 class EncounterMode(enum.StrEnum):

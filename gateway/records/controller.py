@@ -13,8 +13,9 @@ from base.web.problems import BODY, ONE, SESSION, problems
 from base.web.site import AuthedRequest
 from gateway.dependencies import ServicesDep
 from gateway.records.http import outcome_response
+from gateway.records.merge import MergeOutcome, merge_patients
 from gateway.records.record_routes import REPLAYED, with_record_routes
-from schemas.patient import Encounter, Patient
+from schemas.patient import Encounter, Patient, PatientMerge
 from schemas.records import EncounterRecord, Record, RecordKind
 
 MAX_INT64 = 2**63 - 1
@@ -62,6 +63,18 @@ class PatientController(Controller):
         return services.records.list_records(
             request.user, RecordKind.encounter, parent_id=patient_id, include_deleted=include_deleted, limit=None
         )
+
+    @post(
+        "/{patient_id:str}/merge",
+        sync_to_thread=True,
+        status_code=200,
+        summary="Merge another record of the same person into this patient (its encounters and wounds move here)",
+        responses=problems(*ONE, *BODY, 409, 412, 422),
+    )
+    def merge(
+        self, patient_id: IdPath, data: JSONBody[PatientMerge], request: AuthedRequest, services: ServicesDep
+    ) -> MergeOutcome:
+        return merge_patients(services.db, services.config, request.user, patient_id, data.duplicate_id, data.reason)
 
 
 class EncounterController(Controller):

@@ -9,6 +9,7 @@ from litestar import Controller, get, post
 from litestar.params import QueryParameter
 from litestar.response import Redirect, Template
 
+from base.accounts.permissions import DELETE
 from base.web.pages.forms import FormBody, form_fields
 from base.web.pages.rendering import clinic_clock, page, patient_name
 from base.web.paths import IdPath
@@ -26,11 +27,13 @@ from schemas.records import Record, RecordKind
 from schemas.wound import WoundSide, WoundState
 
 Search = Annotated[str, QueryParameter(max_length=200, description="Part of a name or an identifier")]
-PATIENT_SKIP = frozenset({"id"})
+PATIENT_SKIP = frozenset({"id", "merged_into"})
+"""Filled by the page (the id) or only by a merge (merged_into), never typed."""
 ENCOUNTER_SKIP = frozenset({"id", "patient_id"})
 
 
-def _matches(record: Record, query: str) -> bool:
+def matches(record: Record, query: str) -> bool:
+    """Whether every word searched for is in the patient's names, record number or id (any case)."""
     data = record.data
     haystack = " ".join(
         str(v)
@@ -38,6 +41,12 @@ def _matches(record: Record, query: str) -> bool:
         if v
     )
     return all(word in haystack.casefold() for word in query.casefold().split())
+
+
+def _merged_into(services, who, patient: Record) -> Record | None:
+    """The patient a merged duplicate's encounters and wounds moved to."""
+    other = patient.data.get("merged_into")
+    return services.records.get(who, RecordKind.patient, other) if other else None
 
 
 class PatientPages(Controller):
@@ -53,7 +62,7 @@ class PatientPages(Controller):
     def list_(self, request: AuthedRequest, services: ServicesDep, q: Search = "") -> Template:
         patients = services.records.list_records(request.user, RecordKind.patient, limit=None)
         if q.strip():
-            patients = [p for p in patients if _matches(p, q)]
+            patients = [p for p in patients if matches(p, q)]
         patients.sort(key=lambda r: r.meta.updated_at, reverse=True)
         unread = services.transfers.unread_advice(request.user)
         names = {p.meta.id: patient_name(p.data) for p in patients}
@@ -98,6 +107,9 @@ class PatientPages(Controller):
             "patient.html",
             patient=patient,
             name=patient_name(patient.data),
+            merged_into=_merged_into(services, who, patient),
+            may_withdraw=RecordKind.patient in DELETE.get(who.role, frozenset()),
+            problem=request.query_params.get("problem"),
             encounters=encounters,
             wounds=wounds,
             sections=sections,

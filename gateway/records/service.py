@@ -20,13 +20,12 @@ from base.accounts.permissions import (
     require_read,
     require_write,
 )
-from base.storage import audit
 from base.storage import records as store
 from gateway.records import validation
 from gateway.records.assessments import refresh_assessments
 from gateway.records.snapshot import SNAPSHOT_KINDS, current_snapshot
+from gateway.records.versions import write_version
 from gateway.storage.database import Database
-from schemas.base import iso
 from schemas.config import Config
 from schemas.encounter_snapshot import EncounterSnapshot
 from schemas.errors import Conflict, InvalidInput, VersionMismatch
@@ -142,7 +141,7 @@ class RecordService:
             if current.meta.version == 1 and _same_content(current, data_json):
                 return WriteOutcome(current, replayed=True)
             raise Conflict(f"a {kind.label} with id {record_id} already exists with other content", current=current)
-        record = self._write_version(conn, principal, kind, record_id, 1, parent_id, data_json, None, "record.create")
+        record = write_version(conn, principal, kind, record_id, 1, parent_id, data_json, None, "record.create")
         self._refresh_results(conn, principal, kind, record_id)
         return WriteOutcome(record, created=True)
 
@@ -180,7 +179,7 @@ class RecordService:
         if same_content and not current.meta.deleted:
             return WriteOutcome(current, replayed=True)
         action = "record.restore" if current.meta.deleted else "record.update"
-        record = self._write_version(
+        record = write_version(
             conn, principal, kind, record_id, current.meta.version + 1, parent_id, data_json, current, action
         )
         self._refresh_results(conn, principal, kind, record_id)
@@ -206,7 +205,7 @@ class RecordService:
                 f"you withdrew version {if_match} but the record is now at version {current.meta.version}",
                 current=current,
             )
-        record = self._write_version(
+        record = write_version(
             conn,
             principal,
             kind,
@@ -231,48 +230,6 @@ class RecordService:
         if check is not None:
             return check(conn, record_id, struct, self.config)
         return struct, validation.check(conn, kind, record_id, struct, self.config)
-
-    def _write_version(
-        self,
-        conn,
-        principal: Principal,
-        kind: RecordKind,
-        record_id: str,
-        version: int,
-        parent_id: str | None,
-        data_json: bytes,
-        current: Record | None,
-        action: str,
-        *,
-        reason: str | None = None,
-    ) -> Record:
-        deleted = reason is not None
-        record = store.insert_version(
-            conn,
-            kind=kind,
-            record_id=record_id,
-            version=version,
-            parent_id=parent_id,
-            data_json=data_json,
-            created_at=iso(current.meta.created_at) if current else None,
-            updated_by=principal.username,
-            device_id=principal.device_id,
-            deleted=deleted,
-            delete_reason=reason,
-        )
-        audit.append(
-            conn,
-            action=action,
-            user_id=principal.user_id,
-            device_id=principal.device_id,
-            kind=kind.value,
-            record_id=record_id,
-            before_version=current.meta.version if current else None,
-            after_version=version,
-            detail=reason or "",
-            content_hash=store.version_content_hash(data_json.decode(), deleted, reason),
-        )
-        return record
 
     def _refresh_results(self, conn, principal: Principal, kind: RecordKind, record_id: str) -> None:
         """Recompute the calculator results that depend on what was written."""

@@ -156,7 +156,10 @@ def require_live_encounter(conn: sqlite3.Connection, encounter_id: str) -> Recor
 
 
 def check_unchanged_links(kind: RecordKind, struct, current: Record) -> None:
-    """An update may not move a record to another patient or encounter."""
+    """An update may not move a record to another patient or encounter, nor mark a patient as merged (only a merge
+    does: gateway/records/merge.py; restoring a merged patient may clear it)."""
+    if kind is RecordKind.patient and struct.merged_into and struct.merged_into != current.data.get("merged_into"):
+        raise bad_field("$.merged_into", "a patient is marked as merged only by merging the two records")
     if kind in PATIENT_RECORDS and struct.patient_id != current.value().patient_id:
         again = "open a new one" if kind is RecordKind.encounter else "record a new one"
         raise bad_field("$.patient_id", f"{_article(kind)} cannot move to another patient: withdraw it and {again}")

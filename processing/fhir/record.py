@@ -70,6 +70,9 @@ def patient(record: Versioned[Patient]) -> dict:
         out["name"] = [{"use": "temp", "text": p.temporary_label}]
     if p.date_of_birth:
         out["birthDate"] = p.date_of_birth.isoformat()
+    if p.merged_into:  # a duplicate merged into the same person's other record
+        out["active"] = False
+        out["link"] = [{"other": {"identifier": record_identifier("patient", p.merged_into)}, "type": "replaced-by"}]
     return out
 
 
