@@ -9,10 +9,12 @@ import pytest
 
 from base.storage import audit
 from base.storage import records as store
+from gateway.storage import jobs
 from processing.fhir import bundle
 from processing.fhir import record as fhir
 from schemas.accounts import Role
 from schemas.encounter_snapshot import Versioned
+from schemas.ids import uuid7
 from schemas.records import RecordKind
 from tests.conftest import make_user
 from tests.pages_helpers import post_form, sign_in
@@ -46,6 +48,18 @@ def _new_wound(client, patient_id: str, label: str) -> str:
     form = {"id": record_id, "label": label, "regions": "head_anterior"}
     assert post_form(client, f"{page}/wounds/new", form, from_page=page).status_code == 303
     return record_id
+
+
+def _measured_visit(services, encounter_id: str, patient_id: str) -> None:
+    """A finished 3D measurement of the encounter, as the job runner leaves its row."""
+    with services.db.write() as conn:
+        conn.execute(
+            "INSERT INTO analysis_jobs (id, encounter_id, patient_id, input_digest, request, state, priority,"
+            " max_attempts, next_attempt_at, pictures, result_status, created_at, created_by, user_id, finished_at)"
+            " VALUES (?, ?, ?, 'digest', '{}', 'done', 0, 3, '', 8, 'ok', '2026-12-03T09:00:00+00:00', 'cleo', 'u',"
+            " '2026-12-03T09:10:00+00:00')",
+            (uuid7(), encounter_id, patient_id),
+        )
 
 
 def _head(services, kind: RecordKind, record_id: str):
@@ -146,8 +160,12 @@ def test_a_merge_moves_encounters_and_wounds_and_withdraws_the_duplicate(clinici
     assert f"/patients/{keep}/merge/{duplicate}" in choose
     compare = clinician.get(f"/patients/{keep}/merge/{duplicate}").text
     assert "1990-04-02" in compare and "MRN-7" in compare
+    _measured_visit(services, encounter, duplicate)
     r = post_form(clinician, f"/patients/{keep}/merge/{duplicate}", {"version": "1", "reason": "registered twice"})
     assert r.status_code == 303, r.text[:500]
+    with services.db.read() as conn:  # the healing track reads measured visits by patient: they follow
+        assert [j.encounter_id for j in jobs.measured(conn, keep)] == [encounter]
+        assert jobs.measured(conn, duplicate) == []
 
     moved = _history(services, RecordKind.encounter, encounter)
     assert [v.data["patient_id"] for v in moved] == [duplicate, keep]

@@ -16,6 +16,7 @@ from base.accounts.permissions import Principal, require_delete, require_write
 from base.storage import records as store
 from gateway.records.assessments import refresh_assessments
 from gateway.records.versions import write_version
+from gateway.storage import jobs
 from gateway.storage.database import Database
 from schemas.config import Config
 from schemas.errors import Conflict, InvalidInput, VersionMismatch
@@ -58,6 +59,8 @@ def merge_patients(
         keep, duplicate = _live_pair(conn, keep_id, duplicate_id, duplicate_version)
         moved = {kind: _move(conn, principal, kind, duplicate_id, keep_id, reason) for kind in MOVED_KINDS}
         withdrawn = _withdraw_duplicate(conn, principal, keep, duplicate, reason)
+        # The healing track reads the measured visits by patient: the moved encounters' analyses follow them.
+        jobs.move_to_patient(conn, [r.meta.id for r in moved[RecordKind.encounter]], keep_id)
         live = [r.meta.id for r in moved[RecordKind.encounter] if not r.meta.deleted]
         refresh_assessments(conn, principal, live, config)
         return MergeOutcome(

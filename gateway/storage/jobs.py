@@ -109,6 +109,14 @@ def measured(conn: sqlite3.Connection, patient_id: str) -> list[StoredJob]:
     return [_job(r) for r in rows]
 
 
+def move_to_patient(conn: sqlite3.Connection, encounter_ids: list[str], patient_id: str) -> int:
+    """The encounters' jobs now belong to `patient_id` (two records of one person merged); how many moved."""
+    cursor = conn.executemany(
+        "UPDATE analysis_jobs SET patient_id = ? WHERE encounter_id = ?", [(patient_id, e) for e in encounter_ids]
+    )
+    return cursor.rowcount
+
+
 def next_due(conn: sqlite3.Connection, now: str) -> StoredJob | None:
     """The most urgent queued job whose next try may start at `now` (lower priority first, then oldest), or
     None."""
