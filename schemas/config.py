@@ -431,7 +431,9 @@ class SyncConfig(Message):
 
     enabled: bool = False
     """Run the sender in `burnedge serve`: queued cases are sent and the center's advice fetched whenever a link
-    exists. Needs this site's keys (`burnedge keys init`), the center enrolled and `center_endpoints`."""
+    exists. Needs this site's keys (`burnedge keys init`), the center enrolled and `center_endpoints`. Once the
+    administrator sets the link on the Burn center page, that setting takes the place of this one and of
+    `center_endpoints` (docs/operations.md)."""
     keys_dir: str = ""
     """Folder of this site's keys; empty means "burnedge-keys" beside the database. Back it up: a site that loses
     its keys must be enrolled again at the center."""
