@@ -43,8 +43,14 @@ def test_breathing_rate_blood_pressure_and_temperature():
     assert "hypothermia" in unusual_vitals(survey(temp=34.2), 40)["exposure.temperature_c"]
 
 
-def test_adult_rates_are_left_out_for_want_of_a_checked_source_and_no_age_means_no_age_ranges():
-    assert unusual_vitals(survey(hr=210, rr=40), 40) == {}
+def test_adults_are_warned_where_news2_scores_a_parameter_3_and_no_age_means_no_age_ranges():
+    warned = unusual_vitals(survey(hr=131, rr=25, sbp=220, temp=39.1), 40)
+    assert "NEWS2 scores a pulse of 40 /min or less, or 131 /min or more, 3" in warned["circulation.heart_rate_per_min"]
+    assert "a breathing rate of 8 /min or less, or 25 /min or more" in warned["breathing.respiratory_rate_per_min"]
+    assert "220 mmHg or more" in warned["circulation.systolic_bp_mmhg"]
+    assert "fever" in warned["exposure.temperature_c"]
+    assert unusual_vitals(survey(hr=130, rr=24, sbp=219, temp=39.0), 40) == {}  # the last values NEWS2 scores below 3
+    assert "circulation.heart_rate_per_min" in unusual_vitals(survey(hr=40), 18)
     assert unusual_vitals(survey(hr=210, sbp=60), None) == {}
 
 

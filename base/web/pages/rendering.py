@@ -83,6 +83,11 @@ def when(value: str | dt.datetime | None, clock: ClinicClock | None = None) -> s
     return (clock or ClinicClock()).local(moment).strftime("%Y-%m-%d %H:%M %Z").strip()
 
 
+def short_id(record_id: str) -> str:
+    """The last 8 hex digits of an id: its random part (ids made in the same millisecond share their first ones)."""
+    return record_id.replace("-", "")[-8:]
+
+
 def size(value: int) -> str:
     """Bytes as people read them: "840 kB", "11.6 MB"."""
     if value < 1_000_000:
@@ -112,6 +117,7 @@ def environment(directories: Sequence[Path], clock: ClinicClock | None = None) -
     env.filters["when"] = lambda value: when(value, clock)
     env.filters["patient_name"] = patient_name
     env.filters["region_name"] = region_name
+    env.filters["short_id"] = short_id
     env.globals["version"] = __version__
     env.globals["errors_in"] = errors_in
     env.globals["fluid_card"] = fluid_card
