@@ -8,6 +8,7 @@ import datetime as dt
 import json
 from pathlib import Path
 
+import msgspec
 import pytest
 
 from harness.bodies import encounter_body, now, patient_body
@@ -18,6 +19,7 @@ from schemas.clinical_results import InputRef
 from schemas.encounter_snapshot import AnalysisVisit, Versioned
 from schemas.ids import uuid7
 from schemas.jobs import BurnAnalysis
+from schemas.patient import Encounter
 from schemas.transfer import Consultation, ConsultationNote, Recommendation
 
 fhir_resources = pytest.importorskip("fhir.resources", reason="the FHIR export needs fhir.resources (pyproject)")
@@ -228,3 +230,31 @@ def test_a_patient_and_an_encounter_sharing_a_record_id_are_two_resources(client
     (p,), (e,) = _of_type(bundle, "Patient"), _of_type(bundle, "Encounter")
     assert p["identifier"][0]["value"] == e["identifier"][0]["value"] == shared and p["id"] != e["id"]
     assert e["subject"] == {"reference": f"urn:uuid:{p['id']}"}
+
+
+def test_the_patients_sharing_choice_becomes_a_privacy_consent_and_could_not_ask_makes_none(client, clin, charted):
+    from processing.fhir.consent import consent
+
+    eid = charted["encounter"]["id"]
+    assert _of_type(_export(client, clin, eid).json(), "Consent") == []  # nothing recorded: no Consent
+    current = client.get(f"/api/v1/encounters/{eid}", headers=clin).json()
+    body = {**current["data"], "sharing_consent": "given_by_guardian"}
+    r = client.put(f"/api/v1/encounters/{eid}", json=body, headers={**clin, "If-Match": '"1"'})
+    assert r.status_code == 200, r.text
+    (given,) = _of_type(_export(client, clin, eid).json(), "Consent")
+    model_of("Consent").model_validate(given)
+    assert given["status"] == "active" and given["provision"]["type"] == "permit"
+    assert _code(given["scope"], "http://terminology.hl7.org/CodeSystem/consentscope") == "patient-privacy"
+    assert _code(given["category"][0], "http://loinc.org") == "59284-0"
+    assert "guardian" in given["performer"][0]["display"] and given["patient"]["reference"].startswith("urn:uuid:")
+    encounter = Versioned(
+        msgspec.convert({**body, "sharing_consent": "refused"}, Encounter),
+        InputRef(kind="encounter", id=eid, version=3),
+    )
+    refused = consent(encounter, {"reference": "urn:uuid:p"})
+    model_of("Consent").model_validate(refused)
+    assert refused["provision"]["type"] == "deny"
+    not_asked = msgspec.structs.replace(
+        encounter, value=msgspec.structs.replace(encounter.value, sharing_consent="not_possible")
+    )
+    assert consent(not_asked, {"reference": "urn:uuid:p"}) is None

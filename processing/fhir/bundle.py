@@ -9,7 +9,7 @@ from __future__ import annotations
 import importlib
 from dataclasses import dataclass, field
 
-from processing.fhir import codes, history, record, wound
+from processing.fhir import codes, consent, history, record, wound
 from processing.fhir.codes import concept
 from processing.fhir.record import iso, ref, resource_id
 from processing.fhir.wound import Attached
@@ -117,6 +117,8 @@ def build(inputs: EncounterSnapshot, files: BundleFiles) -> dict:
     resources += record.assessment_observations(inputs.assessment, inputs.chart, inputs.encounter, subject, enc)
     resources += _analysis_resources(inputs, files, subject, enc, wounds)
     resources += record.communications(inputs.consultations, subject, enc)
+    if shared := consent.consent(inputs.encounter, subject):
+        resources.append(shared)
     if files.report:
         text = f"Clinical report {inputs.report_id}, made {iso(inputs.made_at)} by {inputs.made_by}"
         resources.append(wound.document(files.report, "Burn assessment report", subject, enc, text))
