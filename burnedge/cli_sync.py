@@ -148,7 +148,7 @@ def cmd_sync_send(args, config: Config) -> int:
     from gateway.dependencies import Services
 
     with site_database(config, False) as db:
-        _print(Services.build(config, db).transfers.queue(args.encounter_id, args.by))
+        _print(Services.build(config, db).transfers.send_from_console(args.encounter_id, args.by))
     return 0
 
 

@@ -34,6 +34,7 @@ def encounter_body(patient_id: str, encounter_id: str | None = None, injury_hour
         "time_of_injury": (t - dt.timedelta(hours=injury_hours_ago)).isoformat(),
         "time_of_arrival": (t - dt.timedelta(hours=min(injury_hours_ago, 0.5))).isoformat(),
         "clinician": "Dr. Test",
+        "sharing_consent": "given",
     }
     body.update(extra)
     return body

@@ -98,7 +98,10 @@ def load_keys(keys_dir: Path) -> SiteKeys:
     try:
         stored = msgspec.json.decode(private.read_bytes(), type=_PrivateKeys)
     except FileNotFoundError as exc:
-        raise MissingKeys(f"this site has no keys in {keys_dir}: run `burnedge keys init`") from exc
+        raise MissingKeys(
+            f"this site has no keys yet (in {keys_dir}): a clinic's administrator makes them on the Burn center page,"
+            " step 1; from a shell, `burnedge keys init`"
+        ) from exc
     except msgspec.DecodeError as exc:
         raise InvalidInput(f"{private} is damaged ({exc}): restore it from backup") from exc
     return SiteKeys(

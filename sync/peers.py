@@ -79,7 +79,7 @@ def only_center(conn: sqlite3.Connection, wanted: str = "") -> SiteIdentity:
     centers = store.unrevoked_ids(conn, SiteRole.center)
     if len(centers) != 1:
         raise NotFound(
-            f"{len(centers)} burn centers are enrolled: enrol one (`burnedge peers enrol center.pub.json`)"
-            " or name it in [sync] center_id"
+            f"{len(centers)} burn centers are enrolled: the administrator enrols one on the Burn center page, step 2"
+            " (from a shell, `burnedge peers enrol center.pub.json`), or names one in [sync] center_id"
         )
     return trusted(conn, centers[0], SiteRole.center)

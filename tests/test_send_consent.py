@@ -22,3 +22,14 @@ def test_an_unknown_consent_value_is_refused_at_its_field(client, auth):
     client.post("/api/v1/patients", json=patient, headers=clin)
     r = client.post("/api/v1/encounters", json=encounter_body(patient["id"], sharing_consent="maybe"), headers=clin)
     assert r.status_code in (400, 422) and "sharing_consent" in r.text
+
+
+def test_a_case_is_not_sent_before_the_patients_choice_is_recorded(client, auth):
+    clin = auth["clinician"]
+    patient = patient_body()
+    client.post("/api/v1/patients", json=patient, headers=clin)
+    encounter = encounter_body(patient["id"])
+    del encounter["sharing_consent"]
+    assert client.post("/api/v1/encounters", json=encounter, headers=clin).status_code == 201
+    r = client.post(f"/api/v1/encounters/{encounter['id']}/transfers", headers=clin)
+    assert r.status_code == 409 and "consent to sending the case is not recorded" in r.json()["detail"]

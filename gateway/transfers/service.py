@@ -43,10 +43,26 @@ class TransferService:
         if who.role not in SENDERS:
             raise Forbidden("only a clinician may send a case to the burn center")
         require_read(who, RecordKind.encounter)
-        encounter = store.get_head(self.db.connection(), RecordKind.encounter, encounter_id)  # NotFound first
-        if encounter.value().sharing_consent is SharingConsent.refused:
-            raise Conflict("the patient refused that this case be sent: it stays at the clinic", current=encounter)
+        self._check_consent(encounter_id)
         return self.queue(encounter_id, who.username, who)
+
+    def send_from_console(self, encounter_id: str, by: str) -> OutboxEntry:
+        """`burnedge sync send`: the same consent rule as a clinician's sending."""
+        self._check_consent(encounter_id)
+        return self.queue(encounter_id, by)
+
+    def _check_consent(self, encounter_id: str) -> None:
+        """A case leaves the clinic only once the patient's choice is recorded, and never against a refusal."""
+        encounter = store.get_head(self.db.connection(), RecordKind.encounter, encounter_id)  # NotFound first
+        consent = encounter.value().sharing_consent
+        if consent is SharingConsent.refused:
+            raise Conflict("the patient refused that this case be sent: it stays at the clinic", current=encounter)
+        if consent is None:
+            raise Conflict(
+                "the patient's consent to sending the case is not recorded: ask them, then record it on the encounter"
+                " (sharing_consent: given, given_by_guardian, or not_possible when no one can be asked)",
+                current=encounter,
+            )
 
     def preview(self, who: Principal, encounter_id: str) -> SendPreview:
         """To whom the case would go and what it would carry now (nothing is queued)."""
