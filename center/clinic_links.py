@@ -15,7 +15,7 @@ from schemas.errors import Conflict, InvalidInput
 from schemas.transfer import Peer, SiteIdentity, SiteRole
 from sync import peers
 from sync.keys import SiteKeys, fingerprint
-from sync.link_card import identity_from_text, read_card
+from sync.link_card import confirmed_card, read_card
 
 ACTION = "link_sites"
 ANY_HOST = re.compile(r"/(0\.0\.0\.0|\[::\]|::):")
@@ -61,11 +61,7 @@ class ClinicLinks:
 
     def enrol_clinic(self, who: Principal, card: str, compared: bool) -> Peer:
         require_admin(who, ACTION)
-        identity = identity_from_text(card, SiteRole.clinic)
-        if not compared:
-            raise InvalidInput(
-                "compare the fingerprint with the clinic's administrator by phone first, then tick the box"
-            )
+        identity = confirmed_card(card, SiteRole.clinic, compared)
         known = next((p for p in peers.list_peers(self.db) if p.identity.site_id == identity.site_id), None)
         if known is not None and known.revoked_at is None and known.identity != identity:
             raise Conflict(

@@ -75,6 +75,16 @@ def identity_from_text(text: bytes | str, wanted: SiteRole) -> SiteIdentity:
     return identity
 
 
+def confirmed_card(card: str, wanted: SiteRole, compared: bool) -> SiteIdentity:
+    """The keys a confirmation form carries back, once the person ticked that the fingerprints match."""
+    identity = identity_from_text(card, wanted)
+    if not compared:
+        raise InvalidInput(
+            f"compare the fingerprint with the administrator of {ROLE_WORDS[wanted]} by phone first, then tick the box"
+        )
+    return identity
+
+
 def _qr_text(data: bytes) -> bytes:
     image = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_GRAYSCALE)
     if image is None:

@@ -8,13 +8,13 @@ from __future__ import annotations
 from typing import Annotated, Any
 
 from litestar import Controller, Response, get, post
-from litestar.datastructures import UploadFile
 from litestar.enums import RequestEncodingType
 from litestar.params import Body, Dependency
 from litestar.response import Redirect, Template
 
 from base.web.pages.forms import FormBody
 from base.web.pages.rendering import page
+from base.web.pages.uploads import download, uploaded_bytes
 from base.web.paths import SiteIdPath
 from base.web.site import AuthedRequest
 from schemas.errors import BurnedgeError, Conflict, InvalidInput, NotFound
@@ -58,16 +58,11 @@ class ClinicPages(Controller):
     @get("/site.pub.json", sync_to_thread=False)
     def keys_file(self, request: AuthedRequest, services: CentralServicesDep) -> Response:
         identity = services.clinic_links.view(request.user).identity
-        return Response(
-            card_json(identity),
-            media_type="application/json",
-            headers={"Content-Disposition": f'attachment; filename="{identity.site_id}.pub.json"'},
-        )
+        return download(card_json(identity), f"{identity.site_id}.pub.json", "application/json")
 
     @post("/read", status_code=200)
     async def read(self, request: AuthedRequest, data: CardForm, services: CentralServicesDep) -> Template:
-        upload = data.get("card")
-        content = await upload.read(MAX_CARD_BYTES + 1) if isinstance(upload, UploadFile) else b""
+        content = await uploaded_bytes(data, "card", MAX_CARD_BYTES)
         try:
             identity = services.clinic_links.read_clinic(request.user, content)
         except InvalidInput as exc:

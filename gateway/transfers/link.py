@@ -17,7 +17,7 @@ from schemas.errors import Conflict, InvalidInput, MissingKeys
 from schemas.transfer import ZENOH_ENDPOINT_PATTERN, LinkSettings, Peer, SiteIdentity, SiteRole
 from sync import peers
 from sync.keys import fingerprint, init_keys, load_keys
-from sync.link_card import identity_from_text, read_card
+from sync.link_card import confirmed_card, read_card
 from sync.service import SyncService
 
 ACTION = "link_sites"
@@ -99,11 +99,7 @@ class LinkService:
 
     def enrol_center(self, who: Principal, card: str, compared: bool) -> Peer:
         require_admin(who, ACTION)
-        identity = identity_from_text(card, SiteRole.center)
-        if not compared:
-            raise InvalidInput(
-                "compare the fingerprint with the burn center's administrator by phone first, then tick the box"
-            )
+        identity = confirmed_card(card, SiteRole.center, compared)
         current = self._center()
         if current is not None and current.identity.site_id != identity.site_id:
             raise Conflict(

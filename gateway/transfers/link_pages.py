@@ -10,13 +10,13 @@ from __future__ import annotations
 from typing import Annotated, Any
 
 from litestar import Controller, Response, get, post
-from litestar.datastructures import UploadFile
 from litestar.enums import RequestEncodingType
 from litestar.params import Body
 from litestar.response import Redirect, Template
 
 from base.web.pages.forms import FormBody
 from base.web.pages.rendering import page
+from base.web.pages.uploads import download, uploaded_bytes
 from base.web.site import AuthedRequest
 from gateway.dependencies import Services, ServicesDep
 from gateway.pages.common import posted_text
@@ -84,17 +84,12 @@ class LinkPages(Controller):
         identity = services.transfers.link.view(request.user).identity
         if identity is None:
             raise InvalidInput("this clinic has no keys yet: make them on the Burn center page first")
-        return Response(
-            card_json(identity),
-            media_type="application/json",
-            headers={"Content-Disposition": f'attachment; filename="{identity.site_id}.pub.json"'},
-        )
+        return download(card_json(identity), f"{identity.site_id}.pub.json", "application/json")
 
     @post("/center", status_code=200)
     async def read_center(self, request: AuthedRequest, data: CardForm, services: ServicesDep) -> Template:
         """The center's keys read from its file or QR photo and shown to be checked; nothing is stored yet."""
-        upload = data.get("card")
-        content = await upload.read(MAX_CARD_BYTES + 1) if isinstance(upload, UploadFile) else b""
+        content = await uploaded_bytes(data, "card", MAX_CARD_BYTES)
         try:
             identity = services.transfers.link.read_center(request.user, content)
         except InvalidInput as exc:
