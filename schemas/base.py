@@ -51,3 +51,8 @@ def utcnow() -> dt.datetime:
 def iso(t: dt.datetime) -> str:
     """The one text form of a stored timestamp: ISO 8601, microseconds, with offset."""
     return t.isoformat(timespec="microseconds")
+
+
+def counted(n: int, noun: str, plural: str | None = None) -> str:
+    """ "1 photo", "2 photos": a count with its noun in the number people read ("1 photo(s)" reads as a fault)."""
+    return f"{n} {noun if n == 1 else plural or noun + 's'}"

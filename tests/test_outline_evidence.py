@@ -220,4 +220,4 @@ def test_an_outline_cut_at_the_edge_of_a_view_is_never_high_confidence_and_says_
     good = confidence.score(**GOOD_CAPTURE, outline=evidence())
     cut = confidence.score(**GOOD_CAPTURE, outline=evidence(), outline_cut_views=2)
     assert good.level == "high" and cut.level != "high" and cut.score < good.score
-    assert any("reaches the edge of what it looked at in 2 photo(s)" in r for r in cut.reasons)
+    assert any("reaches the edge of what it looked at in 2 photos" in r for r in cut.reasons)

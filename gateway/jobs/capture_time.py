@@ -14,7 +14,7 @@ import re
 import zoneinfo
 from collections import Counter
 
-from schemas.base import iso
+from schemas.base import counted, iso
 from schemas.capture import Asset, CaptureMetadata
 from schemas.config import AnalysisConfig
 from schemas.jobs import CaptureTime, CaptureTimeSource
@@ -78,7 +78,7 @@ def capture_time(pictures: list[Asset], injury: dt.datetime | None, conf: Analys
         return CaptureTime(at=iso(earliest.astimezone(dt.UTC)), source=CaptureTimeSource.camera, detail=detail)
     detail = "upload time" + (f": {others}" if others else "")
     if own:
-        detail += f"; {own} camera time(s) later than the earliest upload"
+        detail += f"; {counted(own, 'camera time')} later than the earliest upload"
     return CaptureTime(at=iso(earliest.astimezone(dt.UTC)), source=CaptureTimeSource.upload, detail=detail)
 
 

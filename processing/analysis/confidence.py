@@ -21,6 +21,7 @@ import math
 
 from processing.analysis import outline_evidence
 from schemas.analysis import ConfidenceRecord, OutlineEvidence
+from schemas.base import counted
 
 B0 = -7.5
 B_SEEN = 8.0
@@ -83,7 +84,7 @@ def score(
         )
     if outline_cut_views:
         reasons.append(
-            f"the model's outline reaches the edge of what it looked at in {outline_cut_views} photo(s): "
+            f"the model's outline reaches the edge of what it looked at in {counted(outline_cut_views, 'photo')}: "
             "the burn may be larger than measured"
         )
     reasons += outline_reasons

@@ -13,6 +13,7 @@ from processing.reconstruction.marker_edges import linear_intensity, refine_quad
 from processing.reconstruction.triangulate import triangulate
 from processing.reconstruction.views import View, load_views, read_gray, read_model
 from processing.stages import write_json
+from schemas.base import counted
 from schemas.config import ReconstructionConfig
 from schemas.errors import CaptureInsufficient
 from schemas.reconstruction import FailureCode, RulerPoints, ScaleEstimate, ScaleResult, ScaleSource
@@ -120,7 +121,7 @@ def from_marker(
         marker_ids=sorted(corners),
         views_with_marker=seen_in,
         mean_corner_reprojection_px=round(float(np.mean(residuals)), 3),
-        note=f"{len(corners)} marker(s), {int(keep.sum())} edges and diagonals",
+        note=f"{counted(len(corners), 'marker')}, {int(keep.sum())} edges and diagonals",
     )
     model_corners = {str(k): v.tolist() for k, v in corners.items()}
     if spread > conf.max_scale_spread or rejected > len(values) // 3:
@@ -141,7 +142,7 @@ def from_ruler(ruler: RulerPoints, views: list[View], why_not_marker: str) -> Sc
     marks = [m for m in ruler.marks if m.image in by_name]
     if len(marks) < 2:
         raise CaptureInsufficient(
-            f"the ruler points are marked in {len(marks)} placed picture(s); mark both points in at least two",
+            f"the ruler points are marked in {counted(len(marks), 'placed picture')}; mark both points in at least two",
             code=FailureCode.bad_ruler,
         )
     chosen = [by_name[m.image] for m in marks]

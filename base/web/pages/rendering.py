@@ -23,6 +23,7 @@ from base.web.pages.fluid_card import fluid_card
 from base.web.pages.forms_fields import errors_in
 from base.web.pages.referral_card import TIER_WORDS, referral_card
 from base.web.pages.session import request_csrf_token
+from schemas.base import counted
 from schemas.burn_chart import region_name
 from schemas.patient import display_name
 
@@ -118,6 +119,7 @@ def environment(directories: Sequence[Path], clock: ClinicClock | None = None) -
     env.filters["patient_name"] = patient_name
     env.filters["region_name"] = region_name
     env.filters["short_id"] = short_id
+    env.filters["counted"] = counted
     env.globals["version"] = __version__
     env.globals["errors_in"] = errors_in
     env.globals["fluid_card"] = fluid_card
