@@ -351,6 +351,7 @@ def test_the_clinicians_flow_end_to_end_and_the_consultants_advice_back(sites, b
     pages |= {"pictures": encounter_url + "/pictures", "analyses": encounter_url + "/analyses"}
     pages |= {slug: f"{encounter_url}/parts/{slug}" for slug in FORM_PAGES}
     pages |= {"patients": clinic + "/patients", "patient": patient_url, "burn-center": clinic + "/transfers"}
+    pages |= {"patient-edit": patient_url + "/edit", "patient-merge": patient_url + "/merge?q=Diallo"}
     page.goto(encounter_url)
     pages["analysis"] = clinic + page.locator(".summary-facts a[href^='/analyses/']").get_attribute("href")
     misfits: dict[str, list[str]] = {}
