@@ -7,7 +7,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import cv2
 import msgspec
 import numpy as np
 import segno
@@ -86,6 +85,8 @@ def confirmed_card(card: str, wanted: SiteRole, compared: bool) -> SiteIdentity:
 
 
 def _qr_text(data: bytes) -> bytes:
+    import cv2  # only when a photo is read: the burn center's server otherwise loads no OpenCV (tests/test_layers.py)
+
     image = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_GRAYSCALE)
     if image is None:
         raise InvalidInput("this is neither a keys file (site.pub.json) nor a photo (JPEG or PNG) of a QR code")

@@ -300,6 +300,7 @@ def _valid_body(path: str, record_id: str) -> dict | None:
         "analyses": {},
         "acts": {"key": "tetanus", "state": "accepted"},
         "decision-support": None,
+        "merge": {"duplicate_id": uuid7(), "reason": "registered twice"},
     }
     if part in bodies:
         return bodies[part]

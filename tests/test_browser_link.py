@@ -145,7 +145,7 @@ def test_two_administrators_link_the_sites_on_their_pages_and_a_case_and_advice_
     nurse = clinic.new_page()
     nurse.context.clear_cookies()
     sign_in(nurse, gateway.url, "clin", f"/encounters/{encounter_id}/send")
-    nurse.get_by_label("The patient agreed to the sending").check()
+    assert "Recorded" in nurse.inner_text("#send-consent")  # the API recorded it with the encounter
     nurse.get_by_role("button", name="Send now").click()
     nurse.wait_for_url(re.compile(r"#burn-center$"))
     cases = wait_for(lambda: center.rows("SELECT site_id, bundle_id FROM bundles"), 60, "the case at the center")

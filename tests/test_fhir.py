@@ -236,25 +236,27 @@ def test_the_patients_sharing_choice_becomes_a_privacy_consent_and_could_not_ask
     from processing.fhir.consent import consent
 
     eid = charted["encounter"]["id"]
-    assert _of_type(_export(client, clin, eid).json(), "Consent") == []  # nothing recorded: no Consent
+    (given,) = _of_type(_export(client, clin, eid).json(), "Consent")  # the patient agreed (harness default)
+    assert given["provision"]["type"] == "permit" and given["performer"][0]["display"] == "the patient"
     current = client.get(f"/api/v1/encounters/{eid}", headers=clin).json()
-    body = {**current["data"], "sharing_consent": "given_by_guardian"}
-    r = client.put(f"/api/v1/encounters/{eid}", json=body, headers={**clin, "If-Match": '"1"'})
-    assert r.status_code == 200, r.text
-    (given,) = _of_type(_export(client, clin, eid).json(), "Consent")
-    model_of("Consent").model_validate(given)
-    assert given["status"] == "active" and given["provision"]["type"] == "permit"
-    assert _code(given["scope"], "http://terminology.hl7.org/CodeSystem/consentscope") == "patient-privacy"
-    assert _code(given["category"][0], "http://loinc.org") == "59284-0"
-    assert "guardian" in given["performer"][0]["display"] and given["patient"]["reference"].startswith("urn:uuid:")
-    encounter = Versioned(
+    for version, choice in enumerate(("not_possible", "given_by_guardian"), start=1):
+        body = {**current["data"], "sharing_consent": choice}
+        r = client.put(f"/api/v1/encounters/{eid}", json=body, headers={**clin, "If-Match": f'"{version}"'})
+        assert r.status_code == 200, r.text
+        if choice == "not_possible":  # not a consent: no Consent resource
+            assert _of_type(_export(client, clin, eid).json(), "Consent") == []
+    (guardian,) = _of_type(_export(client, clin, eid).json(), "Consent")
+    model_of("Consent").model_validate(guardian)
+    assert guardian["status"] == "active" and guardian["provision"]["type"] == "permit"
+    assert _code(guardian["scope"], "http://terminology.hl7.org/CodeSystem/consentscope") == "patient-privacy"
+    assert _code(guardian["category"][0], "http://loinc.org") == "59284-0"
+    assert "guardian" in guardian["performer"][0]["display"] and guardian["patient"]["reference"].startswith("urn:")
+    refused = Versioned(
         msgspec.convert({**body, "sharing_consent": "refused"}, Encounter),
-        InputRef(kind="encounter", id=eid, version=3),
+        InputRef(kind="encounter", id=eid, version=4),
     )
-    refused = consent(encounter, {"reference": "urn:uuid:p"})
-    model_of("Consent").model_validate(refused)
-    assert refused["provision"]["type"] == "deny"
-    not_asked = msgspec.structs.replace(
-        encounter, value=msgspec.structs.replace(encounter.value, sharing_consent="not_possible")
-    )
-    assert consent(not_asked, {"reference": "urn:uuid:p"}) is None
+    denied = consent(refused, {"reference": "urn:uuid:p"})
+    model_of("Consent").model_validate(denied)
+    assert denied["provision"]["type"] == "deny"
+    unrecorded = msgspec.structs.replace(refused, value=msgspec.structs.replace(refused.value, sharing_consent=None))
+    assert consent(unrecorded, {"reference": "urn:uuid:p"}) is None
