@@ -16,7 +16,7 @@ from litestar.testing import TestClient
 from base.folders import keys_dir
 from center.app import CentralServices, create_central_app, open_center_db
 from schemas.accounts import Role, UserCreate
-from schemas.config import CentralConfig, Config
+from schemas.config import CentralConfig, Config, GatewayConfig, SyncConfig
 from schemas.transfer import SiteRole
 from sync import peers
 from sync.keys import PRIVATE_FILE, fingerprint, init_keys
@@ -26,6 +26,13 @@ from tests.pages_helpers import post_form, sign_in
 
 CENTER_ENDPOINT = "tcp/127.0.0.1:9"
 """Nothing listens there: the round that the link starts fails at once, as it would with the center down."""
+
+
+@pytest.fixture
+def config(tmp_path) -> Config:
+    """The clinic's; a round to the unreachable test address gives up at once (the app waits for it on closing)."""
+    gateway = GatewayConfig(database=str(tmp_path / "gateway.sqlite3"))
+    return Config(gateway=gateway, security=FAST_SECURITY, sync=SyncConfig(connect_timeout_s=0.3))
 
 
 @pytest.fixture
