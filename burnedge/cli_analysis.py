@@ -13,6 +13,7 @@ from pathlib import Path
 import msgspec
 
 from burnedge.cli_help import examples
+from schemas.base import counted
 from schemas.config import Config
 from schemas.errors import InvalidInput, NotFound
 
@@ -132,7 +133,9 @@ def parse_days(text: str, count: int) -> list[float]:
     except ValueError as exc:
         raise InvalidInput(f"--days {text}: give numbers separated by commas, e.g. 0,7,14,21") from exc
     if len(days) != count:
-        raise InvalidInput(f"--days {text}: {len(days)} day(s) for {count} visit folder(s); give one day per visit")
+        raise InvalidInput(
+            f"--days {text}: {counted(len(days), 'day')} for {counted(count, 'visit folder')}; give one day per visit"
+        )
     if any(not 0 <= d < 10_000 for d in days):
         raise InvalidInput(f"--days {text}: days count from the injury (or the first visit) and must be 0 or more")
     for earlier, later in zip(days, days[1:], strict=False):

@@ -5,6 +5,8 @@ from __future__ import annotations
 import sys
 from typing import TextIO
 
+from schemas.base import counted
+
 WIDTH = 28
 
 
@@ -130,7 +132,7 @@ def wounds_lines(forearm: dict, shin: dict, shin_healing: dict) -> list[str]:
         area = sessions[-1].get("area_cm2") if sessions else (fallback.get("metrics") or {}).get("area_cm2")
         measured, charted = share.get("measured_percent"), share.get("charted_percent")
         lines.append(
-            f"  {label:<14} {len(sessions)} measured visit(s), latest area {_fmt(area)} cm2;"
+            f"  {label:<14} {counted(len(sessions), 'measured visit')}, latest area {_fmt(area)} cm2;"
             f" %TBSA measured in 3D {_fmt(measured, '.3f')} beside the chart's {_fmt(charted, '.3f')}"
             + (f"  CHECK: {share['flag']}" if share.get("flag") else "")
         )

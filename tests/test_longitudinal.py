@@ -343,7 +343,7 @@ def test_cli_track_refuses_bad_days_and_missing_folders_before_analysing(tmp_pat
     a.mkdir()
     b.mkdir()
     for days, code, message in (
-        ("0,7,14", 2, "3 day(s) for 2 visit folder(s)"),
+        ("0,7,14", 2, "3 days for 2 visit folders"),
         ("7,0", 2, "must not decrease"),
         ("0,seven", 2, "numbers separated by commas"),
         ("-1,3", 2, "must be 0 or more"),
