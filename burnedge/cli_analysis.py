@@ -203,7 +203,10 @@ def cmd_train_segmentation(args: argparse.Namespace, config: Config) -> int:
             raise InvalidInput(f"training recipe {args.recipe}: {exc}") from exc
     if args.epochs:
         conf = msgspec.structs.replace(conf, epochs=args.epochs)
-    report = run(conf, Path(args.data), Path(args.out), Path(args.cache or Path(args.out) / "phantoms"))
+    if args.encoder:
+        conf = msgspec.structs.replace(conf, encoder=args.encoder)
+    cache = Path(args.cache or Path(args.out) / "phantoms")
+    report = run(conf, Path(args.data), Path(args.out), cache, max_minutes=args.max_minutes)
     print(report.read_text())
     return 0
 
@@ -297,4 +300,15 @@ def add_commands(sub, config_of: Callable[[argparse.Namespace], Config]) -> None
     train.add_argument("--cache", metavar="DIR", help="where the rendered training phantoms are kept (OUT/phantoms)")
     train.add_argument("--recipe", metavar="FILE", help="JSON training recipe (see schemas/segmentation.py)")
     train.add_argument("--epochs", type=int, help="override the recipe's number of epochs")
+    train.add_argument(
+        "--encoder",
+        choices=["plain", "efficientnet-lite0"],
+        help="the network: the small U-Net from scratch (plain) or on ImageNet-pretrained EfficientNet-Lite0",
+    )
+    train.add_argument(
+        "--max-minutes",
+        type=float,
+        metavar="M",
+        help="stop before an epoch that would end after M minutes (the checkpoint keeps it; run again to go on)",
+    )
     train.set_defaults(func=bind(cmd_train_segmentation))

