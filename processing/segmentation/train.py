@@ -226,7 +226,8 @@ def _run_stage(
     state = state | checkpoint.load(net, opt, sched, rng)
     if state["epoch"] > first:
         log.info("continuing %s after epoch %d of %d", checkpoint.path, state["epoch"], last)
-    epoch_seconds = 0.0
+    # A new stage or a continued run has timed no epoch yet: the mean so far stands in for the next one.
+    epoch_seconds = state["train_seconds"] / state["epoch"] if state["epoch"] else 0.0
     while state["epoch"] < min(last, stop_after):
         started = time.monotonic()
         if deadline is not None and started + epoch_seconds > deadline:
