@@ -66,9 +66,10 @@ class SyncService:
                 detail=f"link {'on' if settings.enabled else 'off'}, burn center at {endpoints}, by {settings.set_by}",
             )
 
-    def effective_config(self) -> Config:
-        """The configuration with the Burn center page's link in place of [sync] enabled and center_endpoints."""
-        settings = self.link_settings()
+    def effective_config(self, settings: LinkSettings | None = None) -> Config:
+        """The configuration with the Burn center page's link (`settings`, else as stored) in place of [sync]
+        enabled and center_endpoints."""
+        settings = settings or self.link_settings()
         if settings is None:
             return self.config
         sync = msgspec.structs.replace(
@@ -130,7 +131,7 @@ class SyncService:
         except BurnedgeError:
             site_id = None
         settings = self.link_settings()
-        config = self.effective_config()
+        config = self.effective_config(settings)
         try:
             center_id = peers.only_center(conn, self.config.sync.center_id).site_id
         except BurnedgeError:

@@ -12,7 +12,7 @@ from litestar.enums import RequestEncodingType
 from litestar.params import Body, Dependency
 from litestar.response import Redirect, Template
 
-from base.web.pages.forms import FormBody
+from base.web.pages.forms import FormBody, posted_text
 from base.web.pages.rendering import page
 from base.web.pages.uploads import download, uploaded_bytes
 from base.web.paths import SiteIdPath
@@ -27,11 +27,6 @@ DONE = {
     " Its administrator now switches the link on at the clinic.",
     "unlinked": "The clinic was unlinked: what it sends from now on is refused; what it sent before stays readable.",
 }
-
-
-def _text(data: dict[str, Any], name: str) -> str:
-    value = data.get(name, "")
-    return value if isinstance(value, str) else ""
 
 
 def _clinics_page(request: AuthedRequest, services, status: int = 200, **state: Any) -> Template:
@@ -71,9 +66,9 @@ class ClinicPages(Controller):
 
     @post("/enrol", sync_to_thread=True, status_code=303)
     def enrol(self, request: AuthedRequest, data: FormBody, services: CentralServicesDep) -> Redirect | Template:
-        card = _text(data, "card")
+        card = posted_text(data, "card")
         try:
-            services.clinic_links.enrol_clinic(request.user, card, _text(data, "compared") == "yes")
+            services.clinic_links.enrol_clinic(request.user, card, posted_text(data, "compared") == "yes")
         except (InvalidInput, Conflict) as exc:
             return _enrol_again(request, services, card, exc)
         return Redirect(path="/clinics", query_params={"done": "enrolled"}, status_code=303)
@@ -83,7 +78,7 @@ class ClinicPages(Controller):
         self, site_id: SiteIdPath, request: AuthedRequest, data: FormBody, services: CentralServicesDep
     ) -> Redirect | Template:
         try:
-            services.clinic_links.unlink_clinic(request.user, site_id, _text(data, "reason"))
+            services.clinic_links.unlink_clinic(request.user, site_id, posted_text(data, "reason"))
         except (InvalidInput, NotFound) as exc:
             return _clinics_page(request, services, exc.status, row_problems={site_id: exc.detail})
         return Redirect(path="/clinics", query_params={"done": "unlinked"}, status_code=303)

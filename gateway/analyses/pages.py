@@ -11,7 +11,7 @@ import msgspec
 from litestar import Controller, get, post
 from litestar.response import Redirect, Template
 
-from base.web.pages.forms import FormBody
+from base.web.pages.forms import FormBody, posted_text
 from base.web.pages.rendering import page
 from base.web.paths import IdPath
 from base.web.site import AuthedRequest
@@ -19,7 +19,6 @@ from gateway.analyses.summary import summary
 from gateway.capture.picture_pages import grouped
 from gateway.dependencies import ServicesDep
 from gateway.jobs.estimate import heading
-from gateway.pages.common import posted_text
 from gateway.pages.encounter_view import encounter_header
 from gateway.pages.healing_view import PAINTED_SURFACE
 from schemas.base import utcnow

@@ -14,13 +14,12 @@ from litestar.enums import RequestEncodingType
 from litestar.params import Body
 from litestar.response import File, Redirect, Template
 
-from base.web.pages.forms import FormBody
+from base.web.pages.forms import FormBody, posted_text
 from base.web.pages.rendering import page
 from base.web.paths import IdPath
 from base.web.site import AuthedRequest
 from gateway.capture.uploads import check_filename
 from gateway.dependencies import ServicesDep
-from gateway.pages.common import posted_text
 from gateway.pages.encounter_view import encounter_header
 from gateway.scheduler import run_frames_now
 from schemas.capture import Asset, AssetKind

@@ -11,18 +11,11 @@ import msgspec
 
 from base.accounts.permissions import WRITE, Principal
 from base.web.pages.clinic_time import ClinicClock
-from base.web.pages.forms import FormInvalid, field_errors, parse_form
+from base.web.pages.forms import FormInvalid, field_errors, parse_form, posted_text
 from gateway.dependencies import Services
 from schemas.base import ID_PATTERN
 from schemas.errors import Conflict, InvalidInput, VersionMismatch
 from schemas.records import Record, RecordKind
-
-
-def posted_text(data: dict[str, Any], name: str) -> str:
-    value = data.get(name, "")
-    if isinstance(value, list):
-        value = value[0] if value else ""
-    return value if isinstance(value, str) else ""
 
 
 def posted_version(data: dict[str, Any]) -> int:

@@ -7,12 +7,12 @@ import msgspec
 from litestar import Controller, get, post
 from litestar.response import Redirect, Template
 
-from base.web.pages.forms import FormBody, form_fields
+from base.web.pages.forms import FormBody, form_fields, posted_text
 from base.web.pages.rendering import clinic_clock, page, patient_name
 from base.web.paths import IdPath
 from base.web.site import AuthedRequest
 from gateway.dependencies import ServicesDep
-from gateway.pages.common import parse_or_errors, posted_text, posted_version, saved_first, service_errors
+from gateway.pages.common import parse_or_errors, posted_version, saved_first, service_errors
 from gateway.records.patient_pages import PATIENT_SKIP
 from schemas.errors import InvalidInput, VersionMismatch
 from schemas.patient import Patient

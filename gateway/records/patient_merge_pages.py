@@ -8,12 +8,12 @@ import msgspec
 from litestar import Controller, get, post
 from litestar.response import Redirect, Template
 
-from base.web.pages.forms import FormBody
+from base.web.pages.forms import FormBody, posted_text
 from base.web.pages.rendering import page, patient_name
 from base.web.paths import IdPath
 from base.web.site import AuthedRequest
 from gateway.dependencies import ServicesDep
-from gateway.pages.common import posted_text, posted_version
+from gateway.pages.common import posted_version
 from gateway.records.merge import merge_patients
 from gateway.records.patient_pages import Search, matches
 from schemas.errors import Conflict, InvalidInput

@@ -14,12 +14,12 @@ from litestar.enums import RequestEncodingType
 from litestar.params import Body
 from litestar.response import Redirect, Template
 
-from base.web.pages.forms import FormBody
+from base.web.pages.forms import FormBody, posted_text
 from base.web.pages.rendering import page
 from base.web.pages.uploads import download, uploaded_bytes
 from base.web.site import AuthedRequest
 from gateway.dependencies import Services, ServicesDep
-from gateway.pages.common import posted_text
+from schemas.accounts import Role
 from schemas.errors import BurnedgeError, Conflict, InvalidInput
 from sync.link_card import MAX_CARD_BYTES, CardToCheck, card_json, card_qr_svg
 
@@ -48,7 +48,7 @@ NO_PROBLEMS: dict[str, Any] = {
 def transfers_page(request: AuthedRequest, services: Services, status: int = 200, **link_state: Any) -> Template:
     """The Burn center page: the link's state, the administrator's steps to link it, every case sent."""
     who = request.user
-    link = services.transfers.link.view(who) if who.role.value == "admin" else None
+    link = services.transfers.link.view(who) if who.role is Role.admin else None
     return page(
         request,
         "transfers.html",

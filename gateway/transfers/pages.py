@@ -6,12 +6,12 @@ from __future__ import annotations
 from litestar import Controller, get, post
 from litestar.response import Redirect, Template
 
-from base.web.pages.forms import FormBody
+from base.web.pages.forms import FormBody, posted_text
 from base.web.pages.rendering import page
 from base.web.paths import IdPath
 from base.web.site import AuthedRequest
 from gateway.dependencies import ServicesDep
-from gateway.pages.common import posted_text, posted_version
+from gateway.pages.common import posted_version
 from gateway.pages.encounter_view import encounter_header
 from gateway.transfers.link_pages import transfers_page
 from gateway.transfers.send_preview import CONSENT_WORDS, MADE_WHEN_SENT

@@ -234,3 +234,11 @@ def field_errors(problems: list[FieldProblem]) -> dict[str, str]:
         plain = _problem(p.field, p.message)
         out[plain.field] = f"{out[plain.field]}; {plain.message}" if plain.field in out else plain.message
     return out
+
+
+def posted_text(data: dict[str, Any], name: str) -> str:
+    """One text field of a posted form ("" when absent or not text; the first when sent twice)."""
+    value = data.get(name, "")
+    if isinstance(value, list):
+        value = value[0] if value else ""
+    return value if isinstance(value, str) else ""
