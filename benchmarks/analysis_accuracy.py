@@ -67,6 +67,19 @@ OURS = {
     "ours_small_I": PhantomSpec(
         shape=PhantomShape.foot, seed=40, tone=SkinTone.I, area_cm2=5.0, depth_mm=0.0, burn_look=BurnLook.superficial
     ),
+    # issue 42: small burns on curved parts from only 6 photos, where the confidence was found wrong elsewhere
+    **{
+        f"ours_small6_{shape.value}_{tone.name}": PhantomSpec(
+            shape=shape, seed=seed, tone=tone, area_cm2=area, depth_mm=depth, views=6, burn_look=look
+        )
+        for shape, seed, tone, area, depth, look in (
+            (PhantomShape.foot, 41, SkinTone.II, 5.0, 0.5, BurnLook.superficial),
+            (PhantomShape.foot, 42, SkinTone.IV, 3.0, 0.0, BurnLook.mixed),
+            (PhantomShape.foot, 43, SkinTone.VI, 6.0, 1.0, BurnLook.deep_partial),
+            (PhantomShape.forearm, 44, SkinTone.III, 4.0, 0.5, BurnLook.superficial),
+            (PhantomShape.foot, 45, SkinTone.I, 2.0, 0.0, BurnLook.mixed),
+        )
+    },
 }
 SHARED_SCENES = {
     "p1_forearm": "p1_forearm",

@@ -1,6 +1,7 @@
 """Healing over time on phantom series with known limb motion and known shrinkage.
 
     .venv/bin/python -m benchmarks.healing_track [--work DIR] [--series p4,ours5,...] [--masks true,model]
+        [--model-file OTHER.onnx]
 
 Series: the independent ../shared/phantoms/p4_series_foot (6 views per session, 1920x1440) and our own rendered
 forearm series (`oursS`: processing.phantom.generate.run_series with seed S, 8 views, 960x720, the size the tests
@@ -119,14 +120,14 @@ def series_folder(name: str, work: Path) -> Path:
     return folder
 
 
-def run_one(name: str, root: Path, work: Path, masks: str) -> dict:
+def run_one(name: str, root: Path, work: Path, masks: str, config: Config) -> dict:
     series = json.loads((root / "ground_truth.json").read_text())
     listing = series["sessions"]
     analyses, sessions = [], []
     for entry in listing:
         scene = root / entry["dir"]
         out = work / name / "analyses" / entry["dir"]
-        analyze(Config(), scene / "images", out, masks=scene / "masks" if masks == "true" else None)
+        analyze(config, scene / "images", out, masks=scene / "masks" if masks == "true" else None)
         analyses.append(out)
         sessions.append(track.SessionAnalysis(day=float(entry["day"]), analysis_dir=out, label=entry["dir"]))
     conf = TrackingConfig()
@@ -195,13 +196,19 @@ def main() -> None:
     parser.add_argument("--work", default=os.path.join(tempfile.gettempdir(), "burnedge-bench-healing"))
     parser.add_argument("--series", default="p4,ours5,ours11", help="p4 and/or oursSEED, comma-separated")
     parser.add_argument("--masks", default="true,model", help="true and/or model, comma-separated")
+    parser.add_argument("--model-file", default="", help="another ONNX model than the shipped one (model masks)")
     args = parser.parse_args()
+    config = Config()
+    if args.model_file:
+        config = msgspec.structs.replace(
+            config, analysis=msgspec.structs.replace(config.analysis, model=args.model_file)
+        )
     work = Path(args.work)
     reports = []
     for name in [s for s in args.series.split(",") if s]:
         root = series_folder(name, work)
         for masks in [m for m in args.masks.split(",") if m]:
-            report = run_one(name, root, work, masks)
+            report = run_one(name, root, work, masks, config)
             reports.append(report)
             for row in report["rows"]:
                 print(json.dumps({"series": name, "masks": masks, **row}), flush=True)

@@ -211,3 +211,11 @@ class TransferRejected(BurnedgeError):
     def __init__(self, detail: str, *, code: str):
         super().__init__(detail)
         self.code = code
+
+
+class ModelExportError(BurnedgeError):
+    """A trained network's ONNX export failed its check (batch norms left unfolded, or onnxruntime answering
+    differently from the network): no model file is written."""
+
+    slug = "model-export-failed"
+    title = "The model's export failed its check"

@@ -237,3 +237,6 @@ class ModelInfo(Frozen):
     real_validation: SplitScores | None = None
     """Held-out real photos, from training_report.json beside the model (None where it is missing)."""
     synthetic_validation: SplitScores | None = None
+    architecture: str = ""
+    """The network, e.g. "U-Net decoder on EfficientNet-Lite0 pretrained on ImageNet" ('' for a model made
+    before it was stamped)."""

@@ -13,7 +13,7 @@ from processing.segmentation import datasets
 from processing.segmentation.infer import SHIPPED_MODEL, BurnSegmenter
 from processing.segmentation.scores import dice_iou, split_scores
 from processing.segmentation.skin_tone import CATEGORIES
-from schemas.errors import InvalidInput
+from schemas.errors import InvalidInput, ModelExportError
 from schemas.segmentation import FairnessTable, HealedStage, TrainingConfig, TrainingReport
 from tests.conftest import SHARED
 
@@ -182,5 +182,22 @@ def test_a_tiny_run_on_the_pretrained_encoder_trains_in_chunks_and_exports(tmp_p
     )
     assert report.epochs_run == 2 and report.config.encoder == "efficientnet-lite0"
     segmenter = BurnSegmenter(tmp_path / "out" / report.model_file)
+    meta = segmenter.metadata
+    assert "EfficientNet-Lite0" in meta["architecture"] and "multiple of 32" in meta["input"]
+    assert "ImageNet" in meta["license"] and "CC BY-NC" in meta["license"]
     prob = segmenter.probability(np.zeros((50, 70, 3), np.uint8))
     assert prob.shape == (50, 70) and 0 <= prob.min() <= prob.max() <= 1
+
+
+def test_an_export_that_onnxruntime_answers_differently_is_refused(tmp_path: Path):
+    torch = pytest.importorskip("torch", reason="training needs the train extra (pip install -e '.[train]')")
+    pytest.importorskip("onnx", reason="training needs the train extra (pip install -e '.[train]')")
+    from processing.segmentation.evaluate import check_export, export
+    from processing.segmentation.network import BurnUNet
+
+    torch.manual_seed(0)
+    net = BurnUNet((4, 8, 8, 8, 8))
+    export(net, tmp_path / "net.onnx")  # checked on export: folded and the same answers
+    other = BurnUNet((4, 8, 8, 8, 8)).eval()
+    with pytest.raises(ModelExportError, match="differs"):
+        check_export(other, tmp_path / "net.onnx")

@@ -35,4 +35,5 @@ def model_info(model: str | Path = "") -> ModelInfo:
         fairness=fairness_of(meta),
         real_validation=report.real_validation if report else None,
         synthetic_validation=report.synthetic_validation if report else None,
+        architecture=meta.get("architecture", ""),
     )

@@ -23,9 +23,10 @@ import torch
 
 from processing.segmentation import datasets, fairness, passes
 from processing.segmentation.infer import BurnSegmenter
-from processing.segmentation.network import BurnUNet, Probability
+from processing.segmentation.network import BurnUNet, LiteUNet, Probability
 from processing.segmentation.scores import split_scores
 from processing.stages import write_json
+from schemas.errors import ModelExportError
 from schemas.segmentation import PassSettings, TrainingConfig, TrainingReport, TrialScore
 
 log = logging.getLogger(__name__)
@@ -39,11 +40,11 @@ the machine was quiet, so 1.6 of it keeps room under the 50 ms goal."""
 TIMED_VIEWS = 24
 
 
-def export(net: BurnUNet, path: Path) -> None:
-    """The network with a sigmoid as ONNX, any batch and side (a multiple of 16)."""
-    net.eval()
+def export(net: BurnUNet | LiteUNet, path: Path) -> None:
+    """The network with a sigmoid as ONNX, any batch and side (a multiple of 16, or 32 on the pretrained
+    encoder), its batch norms folded into the convolutions; checked by check_export."""
     torch.onnx.export(
-        Probability(net),
+        Probability(net).eval(),
         torch.rand(1, 3, 192, 192),
         str(path),
         input_names=["image"],
@@ -52,6 +53,30 @@ def export(net: BurnUNet, path: Path) -> None:
         opset_version=17,
         dynamo=False,
     )
+    check_export(net, path)
+
+
+def check_export(net: BurnUNet | LiteUNet, path: Path, sides: tuple[int, ...] = (128, 192)) -> None:
+    """Refuses an exported graph that keeps a batch norm (unfolded: slower, and a sign of training mode) or
+    that onnxruntime, on one thread as the clinic runs it, answers differently from the network."""
+    import onnx
+    import onnxruntime as ort
+
+    left = [n.name for n in onnx.load(str(path)).graph.node if n.op_type == "BatchNormalization"]
+    if left:
+        raise ModelExportError(f"{path}: {len(left)} batch norms were not folded into their convolutions")
+    options = ort.SessionOptions()
+    options.intra_op_num_threads = 1
+    session = ort.InferenceSession(str(path), options, providers=["CPUExecutionProvider"])
+    generator = torch.Generator().manual_seed(0)
+    net.eval()
+    for side in sides:
+        x = torch.rand(1, 3, side, side, generator=generator)
+        with torch.no_grad():
+            expected = torch.sigmoid(net(x)).numpy()
+        got = session.run(None, {"image": x.numpy()})[0]
+        if got.shape != expected.shape or float(np.abs(got - expected).max()) > 1e-4:
+            raise ModelExportError(f"{path}: onnxruntime's answer at {side} px differs from the network's")
 
 
 def stamp(candidate: Path, path: Path, meta: dict[str, str]) -> None:
@@ -148,22 +173,37 @@ def choose(conf: TrainingConfig, segmenter: BurnSegmenter, real: list, synthetic
     return trials, best
 
 
+ARCHITECTURE = {
+    "plain": "U-Net, 5 levels, trained from scratch",
+    "efficientnet-lite0": "U-Net decoder on EfficientNet-Lite0 pretrained on ImageNet",
+}
+LICENSE = {
+    "plain": "CC BY-NC 4.0 (trained on FUSeg 2021 photos)",
+    "efficientnet-lite0": "CC BY-NC 4.0 (trained on FUSeg 2021 photos; encoder from Google's EfficientNet-Lite0 "
+    "ImageNet weights, Apache-2.0 code, ImageNet images for non-commercial research)",
+}
+
+
 def model_meta(conf: TrainingConfig, s: PassSettings, version: str, table) -> dict[str, str]:
+    multiple = 16 if conf.encoder == "plain" else 32
     return {
         "version": version,
         "input_size": str(s.fine_size),
         "coarse_size": str(s.coarse_size),
         "threshold": str(s.threshold),
         "fine_pass": "true" if s.fine_pass else "false",
-        "input": "RGB float32 in [0, 1], NCHW, sides a multiple of 16",
+        "input": f"RGB float32 in [0, 1], NCHW, sides a multiple of {multiple}",
         "output": "burn probability per pixel",
-        "license": "CC BY-NC 4.0 (trained on FUSeg 2021 photos)",
+        "architecture": ARCHITECTURE[conf.encoder],
+        "license": LICENSE[conf.encoder],
         "card": "docs/segmentation-model.md",
         "fairness": msgspec.json.encode(table).decode(),
     }
 
 
-def run(conf: TrainingConfig, net: BurnUNet, state: dict, real: dict, synthetic: dict, out_dir: Path) -> Path:
+def run(
+    conf: TrainingConfig, net: BurnUNet | LiteUNet, state: dict, real: dict, synthetic: dict, out_dir: Path
+) -> Path:
     candidate = out_dir / "candidate.onnx"
     single = PassSettings(coarse_size=conf.input_size, fine_size=conf.input_size, threshold=0.5, fine_pass=False)
     export(net, candidate)
