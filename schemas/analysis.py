@@ -75,6 +75,9 @@ class OutlineEvidence(Frozen):
     """Held-out photos in that group."""
     model_version: str = ""
     """The segmentation model behind the masks ('' when people drew them all)."""
+    model_architecture: str = ""
+    """Its network in words, e.g. "U-Net decoder on EfficientNet-Lite0 pretrained on ImageNet" ('' for a model
+    made before it was stamped)."""
 
 
 class ConfidenceRecord(Frozen):
@@ -151,6 +154,8 @@ class ModelSummary(Frozen):
     """Probability the model cuts at; the probability maps are rescaled so it sits at 0.5."""
     fairness: FairnessTable | None = None
     """Held-out Dice by skin tone, from the model file (docs/segmentation-model.md)."""
+    architecture: str = ""
+    """The network in words, from the model file's metadata ('' for a model made before it was stamped)."""
 
 
 class SegmentationRecord(Frozen):

@@ -207,9 +207,12 @@ def test_the_evidence_takes_the_median_of_the_models_views_and_the_groups_held_o
             view(2, skin_ita=25.0, uncertain_band_px=2.0),
             view(3, MaskSource.clinician_mask, skin_ita=-60.0),
         ],
-        model=ModelSummary(version="burnseg-x", sha256="0" * 64, threshold=0.4, fairness=table),
+        model=ModelSummary(
+            version="burnseg-x", sha256="0" * 64, threshold=0.4, fairness=table, architecture="U-Net on Lite0"
+        ),
     )
     e = outline_evidence.gather(record, view_agreement=0.8)
+    assert e.model_version == "burnseg-x" and e.model_architecture == "U-Net on Lite0"
     assert e.skin_tone_ita == 20.0 and e.skin_tone_group == "tan" and e.group_dice == 0.77
     assert e.group_dice_ci95 == [0.7, 0.83] and e.pass_disagreement == 0.2 and e.uncertain_band_px == 2.0
     people_only = SegmentationRecord(views=[view(0, MaskSource.clinician_outline)])
@@ -221,3 +224,14 @@ def test_an_outline_cut_at_the_edge_of_a_view_is_never_high_confidence_and_says_
     cut = confidence.score(**GOOD_CAPTURE, outline=evidence(), outline_cut_views=2)
     assert good.level == "high" and cut.level != "high" and cut.score < good.score
     assert any("reaches the edge of what it looked at in 2 photos" in r for r in cut.reasons)
+
+
+def test_the_reports_model_row_names_the_model_its_network_and_its_held_out_dice_on_this_skin_tone():
+    from processing.report.sections_analysis import _outline_source
+
+    arch = "U-Net decoder on EfficientNet-Lite0 pretrained on ImageNet"
+    words = _outline_source(confidence.score(**GOOD_CAPTURE, outline=evidence(model_architecture=arch)))
+    assert words.startswith(f"segmentation model burnseg-test ({arch}); skin around the burn estimated tan")
+    assert "held-out Dice on real wound photos of this tone 0.80 (40 photos, 95 % CI 0.74–0.85)" in words
+    older = _outline_source(confidence.score(**GOOD_CAPTURE, outline=evidence()))
+    assert older.startswith("segmentation model burnseg-test; skin")

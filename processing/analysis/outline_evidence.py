@@ -58,6 +58,7 @@ def gather(segmentation: SegmentationRecord, view_agreement: float | None) -> Ou
         group_dice_ci95=[row.ci95_low, row.ci95_high] if row and row.ci95_low is not None else None,
         group_images=row.images if row else 0,
         model_version=model.version,
+        model_architecture=model.architecture,
     )
 
 

@@ -127,6 +127,7 @@ def model_summary(segmenter: BurnSegmenter) -> ModelSummary:
         sha256=segmenter.sha256,
         threshold=segmenter.settings.threshold,
         fairness=fairness_of(segmenter.metadata),
+        architecture=segmenter.metadata.get("architecture", ""),
     )
 
 

@@ -126,6 +126,8 @@ def _outline_source(conf: ConfidenceRecord | None) -> str:
     if e is None:
         return "a clinician, on every photo used" if conf and conf.clinician_masks else "not recorded"
     words = f"segmentation model {e.model_version or '(unversioned)'}"
+    if e.model_architecture:
+        words += f" ({e.model_architecture})"
     if e.skin_tone_group is None:
         return words + "; the skin tone around the burn could not be estimated"
     words += f"; skin around the burn estimated {e.skin_tone_group} (ITA {e.skin_tone_ita:.0f}°)"
