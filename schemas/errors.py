@@ -211,3 +211,12 @@ class TransferRejected(BurnedgeError):
     def __init__(self, detail: str, *, code: str):
         super().__init__(detail)
         self.code = code
+
+
+class PacsFailed(BurnedgeError):
+    """The PACS could not be reached, refused the study (a 4xx) or stored only part of it: nothing is marked as
+    sent, and sending again stores each object once (its UIDs are stable)."""
+
+    status = 502
+    slug = "pacs-failed"
+    title = "The hospital's PACS did not store the study"

@@ -6,7 +6,8 @@ from __future__ import annotations
 import datetime as dt
 import uuid
 
-from processing.dicom.inputs import PatientIdRule, StudyInput
+from processing.dicom.inputs import StudyInput
+from schemas.dicom import PatientIdRule
 
 NAMESPACE = uuid.UUID("6f1c3c5e-3a6e-5b7e-9a43-2b0d6c1f4e21")
 """burnedge's own namespace for uuid5: changing it would give every exported object a new UID."""

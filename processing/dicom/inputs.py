@@ -4,23 +4,13 @@ the burn center from a received case (center/pacs.py), so neither server's stora
 from __future__ import annotations
 
 import datetime as dt
-import enum
 
 import msgspec
 
+from schemas.dicom import PatientIdRule
 from schemas.jobs import BurnAnalysis
 from schemas.patient import Encounter, Patient
 from schemas.wound import Wound
-
-
-class PatientIdRule(enum.StrEnum):
-    """How the DICOM PatientID is chosen (the `[dicom] patient_id_rule` setting)."""
-
-    record_number = "record_number"
-    """The medical record number the clinic keyed; a patient without one gets the prefix and burnedge's own
-    patient id, never an empty PatientID."""
-    burnedge_id = "burnedge_id"
-    """Always the prefix and burnedge's own patient id (a PACS that must not see the clinic's numbers)."""
 
 
 class Photo(msgspec.Struct, frozen=True):
