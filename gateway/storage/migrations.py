@@ -259,3 +259,27 @@ def m012_advice_read(db: Database) -> None:
         " SELECT c.id, v.version, 'before the advice count', v.created_at FROM record_heads c"
         " JOIN record_versions v ON v.seq = c.seq WHERE c.kind = 'consultation'"
     )
+
+
+@migrations()
+def m013_pacs_sends(db: Database) -> None:
+    """Each send of an encounter to the hospital's PACS (DICOMweb): its state, the study's UID, what the PACS held
+    before and why it failed (gateway/storage/pacs_sends.py). A failed send marks nothing as sent."""
+    db.execute(
+        """
+        CREATE TABLE pacs_sends (
+            id TEXT PRIMARY KEY,
+            subject_id TEXT NOT NULL,
+            endpoint TEXT NOT NULL,
+            state TEXT NOT NULL,
+            study_uid TEXT NOT NULL,
+            requested_by TEXT NOT NULL,
+            started_at TEXT NOT NULL,
+            finished_at TEXT,
+            instances INTEGER NOT NULL DEFAULT 0,
+            already_there INTEGER NOT NULL DEFAULT 0,
+            error TEXT NOT NULL DEFAULT ''
+        )
+        """
+    )
+    db.execute("CREATE INDEX pacs_sends_subject ON pacs_sends (subject_id, started_at)")
