@@ -33,13 +33,14 @@ from processing.dicom.inputs import Analysis, StudyInput
 from schemas.analysis import AnalysisStatus
 
 LOCAL = "99BURNEDGE"
-"""burnedge's private coding scheme (PS3.3 8.2: a designator starting "99"), for what no checked code says."""
+"""burnedge's private coding scheme (PS3.3 8.2: a designator starting "99"), for what no checked code says.
+Each code value is at most 16 characters, so it stays a CodeValue (SH) and never a LongCodeValue."""
 
-RELIEF_MAX = Code("surface-relief-max", LOCAL, "Surface relief, deepest (not burn depth)")
-RELIEF_MEAN = Code("surface-relief-mean", LOCAL, "Surface relief, mean (not burn depth)")
-RAISED_MAX = Code("surface-raised-max", LOCAL, "Surface raised above fitted skin, highest")
-BODY_SHARE = Code("body-surface-share", LOCAL, "Share of body surface area (Mosteller)")
-CONFIDENCE_SCORE = Code("confidence-score", LOCAL, "Measurement confidence score")
+RELIEF_MAX = Code("relief-max", LOCAL, "Surface relief, deepest (not burn depth)")
+RELIEF_MEAN = Code("relief-mean", LOCAL, "Surface relief, mean (not burn depth)")
+RAISED_MAX = Code("raised-max", LOCAL, "Surface raised above fitted skin, highest")
+BODY_SHARE = Code("tbsa-share", LOCAL, "Share of body surface area (Mosteller)")
+CONFIDENCE_SCORE = Code("confidence", LOCAL, "Measurement confidence score")
 CONFIDENCE_LEVEL = Code("confidence-level", LOCAL, "Measurement confidence level")
 PROVISIONAL = Code("provisional", LOCAL, "Provisional: under 72 h after the injury")
 MARKER_SHEET = Code("marker-sheet", LOCAL, "Printed fiducial marker sheet")

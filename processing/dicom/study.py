@@ -58,6 +58,10 @@ def build(study: StudyInput) -> Study:
     instances += reports + surfaces
     if study.report_pdf:
         instances.append(report.report_pdf(study, study.report_pdf, 1))
+    for ds in instances:
+        # With a preamble, pydicom writes the full Part 10 file (preamble, "DICM", file meta) wherever the dataset
+        # is written as it stands, as dicomweb-client does for STOW-RS: a PACS is sent files, not bare datasets.
+        ds.preamble = b"\0" * 128
     return Study(common.study_uid(study), instances)
 
 
