@@ -9,16 +9,13 @@ import logging
 import sqlite3
 from pathlib import Path
 
-import msgspec
-
 from base.accounts.permissions import Principal, require_read
 from base.folders import media_root
 from base.storage import assets as asset_store
-from base.storage import audit
+from base.storage import audit, pacs_sends
 from base.storage.blobs import MediaStore
 from gateway.documents.fhir import SURFACE, taken
 from gateway.documents.reports import REPORT_KINDS, ReportService
-from gateway.storage import pacs_sends
 from processing.dicom import web
 from processing.dicom.inputs import Analysis, Photo, StudyInput
 from processing.dicom.study import Study, build
@@ -161,7 +158,7 @@ class DicomService:
             require_read(principal, RecordKind.encounter)
         with self.db.read() as conn:
             found = pacs_sends.of_subject(conn, encounter_id)
-        return [_settled(s) for s in found]
+        return [pacs_sends.settled(s, STALE_S) for s in found]
 
     def _audit(self, principal, encounter_id: str, action: str, detail: str, conn=None) -> None:
         user_id, device_id = _who(principal)
@@ -182,14 +179,3 @@ class DicomService:
             return
         with self.db.write() as c:
             write(c)
-
-
-def _settled(send: PacsSend) -> PacsSend:
-    if send.state is not PacsSendState.sending:
-        return send
-    started = dt.datetime.fromisoformat(send.started_at)
-    if (utcnow() - started).total_seconds() < STALE_S:
-        return send
-    return msgspec.structs.replace(
-        send, state=PacsSendState.failed, error="the send was cut short (the gateway stopped): send again"
-    )

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from sqlite_utils import Database, Migrations
 
-from base.storage import schema
+from base.storage import pacs_sends, schema
 
 migrations = Migrations("burnedge")
 
@@ -264,22 +264,5 @@ def m012_advice_read(db: Database) -> None:
 @migrations()
 def m013_pacs_sends(db: Database) -> None:
     """Each send of an encounter to the hospital's PACS (DICOMweb): its state, the study's UID, what the PACS held
-    before and why it failed (gateway/storage/pacs_sends.py). A failed send marks nothing as sent."""
-    db.execute(
-        """
-        CREATE TABLE pacs_sends (
-            id TEXT PRIMARY KEY,
-            subject_id TEXT NOT NULL,
-            endpoint TEXT NOT NULL,
-            state TEXT NOT NULL,
-            study_uid TEXT NOT NULL,
-            requested_by TEXT NOT NULL,
-            started_at TEXT NOT NULL,
-            finished_at TEXT,
-            instances INTEGER NOT NULL DEFAULT 0,
-            already_there INTEGER NOT NULL DEFAULT 0,
-            error TEXT NOT NULL DEFAULT ''
-        )
-        """
-    )
-    db.execute("CREATE INDEX pacs_sends_subject ON pacs_sends (subject_id, started_at)")
+    before and why it failed (base/storage/pacs_sends.py). A failed send marks nothing as sent."""
+    pacs_sends.create_table(db)
