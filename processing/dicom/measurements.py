@@ -33,8 +33,8 @@ from processing.dicom.inputs import Analysis, StudyInput
 from schemas.analysis import AnalysisStatus
 
 LOCAL = "99BURNEDGE"
-"""burnedge's private coding scheme (PS3.3 8.2: a designator starting "99"), for what no checked code says.
-Each code value is at most 16 characters, so it stays a CodeValue (SH) and never a LongCodeValue."""
+"""burnedge's private coding scheme (DICOM reserves designators beginning "99" for private ones), for what no
+checked code says. Each code value is at most 16 characters, so it stays a CodeValue (SH), never a LongCodeValue."""
 
 RELIEF_MAX = Code("relief-max", LOCAL, "Surface relief, deepest (not burn depth)")
 RELIEF_MEAN = Code("relief-mean", LOCAL, "Surface relief, mean (not burn depth)")

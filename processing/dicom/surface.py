@@ -48,13 +48,10 @@ def surface(study: StudyInput, analysis: Analysis, photos: list[Dataset], number
     ds.PositionReferenceIndicator = ""
     ds.ManufacturerModelName = "burnedge 3D burn analysis"
     ds.DeviceSerialNumber = "none"
-    unit = Dataset()
-    mm = codes.UCUM.Millimeter
-    unit.CodeValue, unit.CodingSchemeDesignator, unit.CodeMeaning = mm.value, mm.scheme_designator, mm.meaning
-    ds.MeasurementUnitsCodeSequence = [unit]
+    ds.MeasurementUnitsCodeSequence = [_coded(codes.UCUM.Millimeter)]
     ds.BurnedInAnnotation = "NO"
     ds.DocumentTitle = f"3D burn surface, analysis {record.job_id}"
-    ds.ConceptNameCodeSequence = []
+    ds.ConceptNameCodeSequence = [_coded(codes.DCM.PhotogrammetricImaging3DCAMModel)]  # CID 7061
     ds.MIMETypeOfEncapsulatedDocument = "model/stl"
     ds.EncapsulatedDocument = stl + (b"\0" if len(stl) % 2 else b"")
     ds.EncapsulatedDocumentLength = len(stl)
@@ -62,6 +59,12 @@ def surface(study: StudyInput, analysis: Analysis, photos: list[Dataset], number
     if photos:
         ds.SourceInstanceSequence = [_reference(p) for p in photos]
     return ds
+
+
+def _coded(code) -> Dataset:
+    item = Dataset()
+    item.CodeValue, item.CodingSchemeDesignator, item.CodeMeaning = code.value, code.scheme_designator, code.meaning
+    return item
 
 
 def _reference(photo: Dataset) -> Dataset:
