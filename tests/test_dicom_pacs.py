@@ -1,7 +1,8 @@
 """An analysed encounter to a real Orthanc (Debian's `orthanc` and `orthanc-dicomweb`, started on loopback by the
 tests, harness/orthanc.py): from the command line and from the encounter page; one patient and one study with the
 photo, the TID 1500 SR (its area read back), the surface and the PDF; a second send adds nothing; a stopped
-Orthanc is a clear error and nothing is marked as sent."""
+Orthanc, a 4xx and a partial STOW answer are clear errors, nothing is marked as sent, and a retry stores each object
+once."""
 
 from __future__ import annotations
 
@@ -20,12 +21,16 @@ from harness.orthanc import PASSWORD as PACS_PASSWORD
 from harness.orthanc import USER as PACS_USER
 from harness.processes import PASSWORD
 from harness.sites import noise_photo
+from processing.dicom import web
 from processing.dicom.measurements import RELIEF_MAX
+from processing.dicom.study import Study, build
 from schemas.accounts import Role, UserCreate
 from schemas.config import Config, DicomConfig, GatewayConfig
 from schemas.dicom import PacsSendState
+from schemas.errors import PacsFailed
 from tests.center_pair import store_analysis_at
 from tests.conftest import FAST_SECURITY, start_orthanc
+from tests.dicom_inputs import study_input
 from tests.pages_helpers import post_form, sign_in
 
 AREA = 18.4  # tests/center_pair.py's analysis
@@ -190,3 +195,26 @@ def test_without_a_configured_pacs_the_page_offers_no_send(tmp_path):
         assert "hospital's PACS" not in page and 'id="pacs"' not in page
     with pytest.raises(Exception, match="no PACS is configured"):
         clinic.services.dicom.send(None, encounter_id)
+
+
+def test_a_partial_stow_answer_or_a_4xx_is_a_clear_error_and_a_retry_stores_each_object_once():
+    orthanc = start_orthanc()
+    try:
+        target = web.Endpoint(orthanc.dicomweb_url, PACS_USER, PACS_PASSWORD, timeout_s=20)
+        study = build(study_input())
+        stranger = build(study_input()).instances[-1]  # another encounter's report: Orthanc refuses it here
+        with pytest.raises(PacsFailed, match=r"stored only part of the study: 1 of 4 objects refused") as partial:
+            web.send(Study(study.study_uid, study.instances[:3] + [stranger]), target)
+        assert "nothing was marked as sent" in partial.value.detail
+        wrong = web.Endpoint(orthanc.dicomweb_url, PACS_USER, "not the password")
+        with pytest.raises(PacsFailed, match=r"refused the credentials \(401\)"):
+            web.send(study, wrong)
+        with pytest.raises(PacsFailed, match=r"refused the request \(404: Unknown resource\)"):
+            web.send(study, web.Endpoint(orthanc.dicomweb_url + "/no-such-root", PACS_USER, PACS_PASSWORD))
+        done = web.send(study, target)
+        assert (done.instances, done.already_there) == (6, 3)  # the three the partial send stored
+        with orthanc.client() as http:
+            stats = http.get("/statistics").json()
+        assert (stats["CountStudies"], stats["CountInstances"]) == (1, 6)  # each object once; the stranger refused
+    finally:
+        orthanc.stop()

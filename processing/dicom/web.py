@@ -19,6 +19,8 @@ from schemas.errors import InvalidInput, PacsFailed
 
 log = logging.getLogger(__name__)
 SOP_INSTANCE_UID = "00080018"
+FAILED_SOP_SEQUENCE = "00081198"
+FAILURE_REASON = "00081197"
 
 
 @dataclass(frozen=True)
@@ -74,12 +76,48 @@ def _client(target: Endpoint):
     return client
 
 
-def _failure(target: Endpoint, exc: Exception, doing: str) -> PacsFailed:
+def _partial(target: Endpoint, failed: int, sent: int, reasons: list[str]) -> PacsFailed:
+    why = f" (failure reason {', '.join(sorted(set(reasons)))})" if reasons else ""
+    return PacsFailed(
+        f"the PACS at {target.shown} stored only part of the study: {failed} of {sent} objects refused{why}; "
+        "nothing was marked as sent, and sending again stores each object once"
+    )
+
+
+def _refused_objects(response) -> tuple[int, list[str]] | None:
+    """The objects a STOW-RS answer lists as failed (its FailedSOPSequence, DICOM JSON), with their failure
+    reasons; None when the answer holds no such list."""
+    try:
+        body = response.json()
+    except ValueError:
+        return None
+    items = body.get(FAILED_SOP_SEQUENCE, {}).get("Value", []) if isinstance(body, dict) else []
+    if not items:
+        return None
+    reasons = [str(v) for item in items for v in item.get(FAILURE_REASON, {}).get("Value", [])]
+    return len(items), reasons
+
+
+def _said(response) -> str:
+    """What an error answer says, short: its JSON "Message" (Orthanc's way) or the start of its text."""
+    try:
+        body = response.json()
+    except ValueError:
+        body = None
+    if isinstance(body, dict) and isinstance(body.get("Message"), str):
+        return body["Message"][:200]
+    return " ".join(response.text.split())[:200]
+
+
+def _failure(target: Endpoint, exc: Exception, doing: str, sent: int = 0) -> PacsFailed:
     import requests
 
     if isinstance(exc, requests.HTTPError) and exc.response is not None:
         status = exc.response.status_code
-        said = exc.response.text.strip().replace("\n", " ")[:300]
+        refused = _refused_objects(exc.response) if sent else None
+        if refused is not None:  # a STOW-RS answer of 409 (or 4xx) that lists the objects it refused
+            return _partial(target, refused[0], sent, refused[1])
+        said = _said(exc.response)
         if status in (401, 403):
             why = f"refused the credentials ({status}): check [dicom] username, password_file or token_file"
         elif 400 <= status < 500:
@@ -122,15 +160,11 @@ def send(study: Study, target: Endpoint) -> PacsOutcome:
     try:
         answer = client.store_instances(study.instances, study_instance_uid=study.study_uid)
     except (requests.RequestException, ValueError) as exc:
-        raise _failure(target, exc, "storing the study") from exc
+        raise _failure(target, exc, "storing the study", sent=len(expected)) from exc
     failed = list(getattr(answer, "FailedSOPSequence", []))
-    if failed:
-        reasons = sorted({str(getattr(item, "FailureReason", "?")) for item in failed})
-        raise PacsFailed(
-            f"the PACS at {target.shown} stored only part of the study: {len(failed)} of {len(expected)} objects "
-            f"refused (failure reason {', '.join(reasons)}); nothing was marked as sent, and sending again stores "
-            "each object once"
-        )
+    if failed:  # a 202: stored with warnings, some refused
+        reasons = [str(item.FailureReason) for item in failed if "FailureReason" in item]
+        raise _partial(target, len(failed), len(expected), reasons)
     missing = expected - stored_instances(target, study.study_uid)
     if missing:
         raise PacsFailed(
