@@ -81,6 +81,17 @@ def test_a_consultant_forwards_the_case_to_the_pacs_as_one_study_and_again_adds_
         assert [r[0] for r in audit] == ["dicom.send", "dicom.send"]
 
 
+def test_a_center_without_a_configured_pacs_offers_no_send(pair):
+    configured = pair.center.pacs
+    pair.center.pacs = CenterPacsService(pair.center.db, pair.center_config, pair.center.cases)
+    try:
+        with pair.consultant() as consultant:
+            page = consultant.get(pair.case_url).text
+        assert "hospital's PACS" not in page and 'id="pacs"' not in page
+    finally:
+        pair.center.pacs = configured
+
+
 def test_a_stopped_pacs_is_shown_as_failed_with_its_reason_and_nothing_is_marked_as_sent(pair, orthanc):
     orthanc.halt()  # the module's last test: its PACS stays down
     with pair.consultant() as consultant:
