@@ -1,5 +1,5 @@
-"""The report and export commands of the CLI: an encounter's clinical report (PDF), or the encounter as a FHIR
-R4 Bundle, written to a file."""
+"""The report and export commands of the CLI: an encounter's clinical report (PDF), the encounter as a FHIR R4
+Bundle written to a file, or as a DICOM study written to a folder or sent to a PACS."""
 
 from __future__ import annotations
 
@@ -57,6 +57,45 @@ def write_fhir(config: Config, encounter_id: str, out: Path, made_by: str) -> di
     return {"encounter_id": encounter_id, "out": str(out), "bytes": len(data), "resources": len(bundle["entry"])}
 
 
+def export_dicom(config: Config, encounter_id: str, out: Path | None, to: str, made_by: str) -> dict:
+    """Write the encounter's DICOM study to the folder `out`, send it to the PACS (`to`, or [dicom] endpoint when
+    `to` is "config"), or both; what was done, as the command prints it."""
+    from gateway.dependencies import Services
+    from gateway.storage.database import Database
+
+    if not Path(config.gateway.database).exists():
+        raise NotFound(f"no database at {config.gateway.database}")
+    if out is None and not to:
+        raise InvalidInput("say where the study goes: --out FOLDER, --to URL (a DICOMweb root), or both")
+    if out is not None and out.exists() and not out.is_dir():
+        raise InvalidInput(f"{out} is a file: give the folder to write the study's files in")
+    db = Database.from_config(config.gateway)
+    try:
+        services = Services.build(config, db)
+        done: dict = {"encounter_id": encounter_id}
+        if out is not None:
+            written = services.dicom.write(None, encounter_id, out, made_by=made_by)
+            done |= {"out": str(out), "files": [p.name for p in written]}
+        if to:
+            sent = services.dicom.send(None, encounter_id, "" if to == "config" else to, made_by=made_by)
+            done |= {
+                "sent_to": sent.endpoint,
+                "study_uid": sent.study_uid,
+                "objects": sent.instances,
+                "already_there": sent.already_there,
+            }
+        return done
+    finally:
+        db.close()
+
+
+def cmd_export_dicom(args: argparse.Namespace, config: Config) -> int:
+    by = f"{getpass.getuser()} (burnedge export dicom on the gateway)"
+    out = Path(args.out) if args.out else None
+    print(json.dumps(export_dicom(config, args.encounter_id, out, args.to or "", by)))
+    return 0
+
+
 def cmd_report(args: argparse.Namespace, config: Config) -> int:
     by = f"{getpass.getuser()} (burnedge report on the gateway)"
     print(json.dumps(write_report(config, args.encounter_id, Path(args.out), by)))
@@ -97,3 +136,21 @@ def add_commands(sub, load: Callable[[argparse.Namespace], Config]) -> None:
     fhir.add_argument("encounter_id", help="the encounter's id")
     fhir.add_argument("--out", required=True, help="the JSON file to write")
     fhir.set_defaults(func=lambda args: cmd_export_fhir(args, load(args)))
+    dicom = export.add_parser(
+        "dicom",
+        help="the encounter as one DICOM study (photos, TID 1500 measurements, 3D surface, PDF report): files, a "
+        "PACS over DICOMweb, or both; docs/dicom.md",
+        **examples(
+            "burnedge export dicom 0192f3b4-6a8f-7000-8000-00000000f000 --out study/",
+            "burnedge export dicom 0192f3b4-6a8f-7000-8000-00000000f000 --to https://pacs.example.org/dicom-web",
+            "burnedge --config burnedge.toml export dicom 0192f3b4-6a8f-7000-8000-00000000f000 --to config",
+        ),
+    )
+    dicom.add_argument("encounter_id", help="the encounter's id")
+    dicom.add_argument("--out", help="the folder to write the study's files (DICOM Part 10) in")
+    dicom.add_argument(
+        "--to",
+        help='a DICOMweb root to store the study at (STOW-RS, checked with QIDO-RS), or "config" for [dicom] '
+        "endpoint; the credentials are [dicom]'s",
+    )
+    dicom.set_defaults(func=lambda args: cmd_export_dicom(args, load(args)))

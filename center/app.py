@@ -37,6 +37,7 @@ from base.web.site import AuthedRequest
 from center.cases import CaseService
 from center.clinic_links import ClinicLinks
 from center.endpoint import Endpoint
+from center.pacs import CenterPacsService
 from center.pages import NAV, SITE_NAME, TEMPLATES, page_controllers
 from center.receiver import Receiver
 from center.storage.migrations import CENTER_STEPS, CENTRAL_SET, central_migrations
@@ -80,19 +81,22 @@ class CentralServices:
     cases: CaseService
     receiver: Receiver
     clinic_links: ClinicLinks
+    pacs: CenterPacsService
 
     @classmethod
     def build(cls, config: Config, db: AnyDatabase) -> CentralServices:
         store_dir = center_store_dir(config.central)
         keys = load_keys(center_keys_dir(config.central))
+        cases = CaseService(db, keys, store_dir)
         return cls(
             config=config,
             db=db,
             keys=keys,
             accounts=AccountService(db, config.security),
-            cases=CaseService(db, keys, store_dir),
+            cases=cases,
             receiver=Receiver(db, config.central, keys, store_dir),
             clinic_links=ClinicLinks(db, keys, config.central),
+            pacs=CenterPacsService(db, config, cases),
         )
 
     def verify_audit(self, principal: Principal | None) -> AuditVerification:

@@ -18,6 +18,7 @@ from gateway.capture.assets import AssetService
 from gateway.capture.frames import FrameService
 from gateway.capture.thumbnails import ThumbnailService
 from gateway.capture.uploads import UploadService
+from gateway.documents.dicom import DicomService
 from gateway.documents.fhir import FhirService
 from gateway.documents.reports import ReportService
 from gateway.phones.sync import PhoneSync
@@ -47,6 +48,7 @@ class Services:
     transfers: TransferService
     reports: ReportService
     fhir: FhirService
+    dicom: DicomService
     thumbnails: ThumbnailService
     wounds: WoundService
     run_sync_now: Callable[[], None] = lambda: None
@@ -75,6 +77,7 @@ class Services:
             transfers=TransferService(db, config, reports),
             reports=reports,
             fhir=FhirService(db, config, reports),
+            dicom=DicomService(db, config, reports),
             thumbnails=ThumbnailService(config, assets),
             wounds=WoundService(records),
         )

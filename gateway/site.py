@@ -30,6 +30,7 @@ def page_controllers() -> list:
     from base.web.pages.sign_in import SignInController
     from gateway.analyses.pages import AnalysisPages
     from gateway.capture.picture_pages import PicturePages
+    from gateway.documents.pacs_pages import EncounterPacsPages
     from gateway.documents.pages import ReportPages
     from gateway.phones.setup_pages import PhoneSetupPages
     from gateway.records.burn_chart_pages import BurnChartPages
@@ -52,6 +53,7 @@ def page_controllers() -> list:
         PicturePages,
         AnalysisPages,
         ReportPages,
+        EncounterPacsPages,
         EncounterSendPages,
         TransferPages,
         LinkPages,

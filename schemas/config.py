@@ -16,6 +16,7 @@ from typing import Annotated, Literal
 import msgspec
 
 from schemas.base import Message
+from schemas.dicom import PatientIdRule
 from schemas.errors import InvalidInput
 
 
@@ -542,6 +543,39 @@ class ReportConfig(Message):
     database."""
 
 
+class DicomConfig(Message):
+    """The hospital's PACS: encounters (and, at the burn center, received cases) sent as DICOM studies over
+    DICOMweb (STOW-RS, checked with QIDO-RS); docs/dicom.md."""
+
+    endpoint: str = ""
+    """The PACS's DICOMweb root, e.g. "https://pacs.example.org/dicom-web" (Orthanc: ".../dicom-web"). Empty: no
+    PACS, and the pages offer no "Send to the hospital's PACS" action."""
+    username: str = ""
+    """HTTP basic authentication user, with `password_file`; empty: no basic authentication."""
+    password_file: str = ""
+    """File holding the basic-authentication password (one line), readable by the service user only."""
+    token_file: str = ""
+    """File holding a bearer token (OAuth 2), sent instead of basic authentication when set."""
+    ca_file: str = ""
+    """CA bundle (PEM) the PACS's HTTPS certificate is checked against; empty: the system's."""
+    timeout_s: Annotated[float, msgspec.Meta(gt=0, le=3600)] = 60.0
+    """How long one request to the PACS may take (a study of full-size photos is tens of MB)."""
+    patient_id_rule: PatientIdRule = PatientIdRule.record_number
+    """How the DICOM PatientID is chosen: "record_number" (the clinic's medical record number, else the prefix and
+    burnedge's patient id) or "burnedge_id" (always the prefix and burnedge's patient id). Never empty."""
+    patient_id_prefix: Annotated[str, msgspec.Meta(max_length=20)] = "BE-"
+    """Put before burnedge's patient id when it stands as the PatientID."""
+    issuer_of_patient_id: Annotated[str, msgspec.Meta(max_length=64)] = ""
+    """IssuerOfPatientID written beside the PatientID (the hospital's name for the clinic's numbering); empty: left
+    out."""
+    institution_name: Annotated[str, msgspec.Meta(max_length=64)] = ""
+    """InstitutionName in every object; empty: [report] clinic_name, else left out."""
+
+    @property
+    def configured(self) -> bool:
+        return bool(self.endpoint.strip())
+
+
 class Config(Message):
     gateway: GatewayConfig = msgspec.field(default_factory=GatewayConfig)
     """The HTTP gateway and its database."""
@@ -573,6 +607,8 @@ class Config(Message):
     """Encrypted backups of the whole gateway state."""
     report: ReportConfig = msgspec.field(default_factory=ReportConfig)
     """The clinical report (PDF) of an encounter."""
+    dicom: DicomConfig = msgspec.field(default_factory=DicomConfig)
+    """The hospital's PACS (DICOMweb), for the clinic and the burn center."""
 
 
 def load_config(path: str | Path | None = None, environ: dict[str, str] | None = None) -> Config:
@@ -601,6 +637,7 @@ def load_config(path: str | Path | None = None, environ: dict[str, str] | None =
         ("sync", SyncConfig),
         ("central", CentralConfig),
         ("backup", BackupConfig),
+        ("dicom", DicomConfig),
     )
     for section, struct in sections:
         defaults = struct()

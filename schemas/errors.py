@@ -219,3 +219,12 @@ class ModelExportError(BurnedgeError):
 
     slug = "model-export-failed"
     title = "The model's export failed its check"
+
+
+class PacsFailed(BurnedgeError):
+    """The PACS could not be reached, refused the study (a 4xx) or stored only part of it: nothing is marked as
+    sent, and sending again stores each object once (its UIDs are stable)."""
+
+    status = 502
+    slug = "pacs-failed"
+    title = "The hospital's PACS did not store the study"

@@ -76,6 +76,12 @@ class Pair:
 def store_analysis(pair: Pair, encounter_id: str, photo_ids: list[str], wound_id: str | None = None) -> str:
     """A finished analysis (of the wound, when given) as gateway/jobs/runner.py stores it: the burn_analysis record
     and its files."""
+    pair.job_id = store_analysis_at(pair.clinic, pair.clinic_config, encounter_id, photo_ids, wound_id)
+    return pair.job_id
+
+
+def store_analysis_at(clinic, config: Config, encounter_id: str, photo_ids: list[str], wound_id: str | None) -> str:
+    """store_analysis on any gateway: its services and config."""
     job_id = uuid7()
     result = AnalysisResult(
         status=AnalysisStatus.ok,
@@ -95,11 +101,11 @@ def store_analysis(pair: Pair, encounter_id: str, photo_ids: list[str], wound_id
         result=result,
         wound_id=wound_id,
     )
-    folder = folders.analysis_dir(pair.clinic_config, job_id)
+    folder = folders.analysis_dir(config, job_id)
     (folder / "surface").mkdir(parents=True)
     (folder / SURFACE).write_bytes(trimesh.creation.box().export(file_type="glb"))
     (folder / "analysis.json").write_bytes(msgspec.json.encode(result))
-    with pair.clinic.db.write() as conn:
+    with clinic.db.write() as conn:
         audit.insert_server_record(
             conn,
             kind=RecordKind.burn_analysis,
@@ -108,7 +114,6 @@ def store_analysis(pair: Pair, encounter_id: str, photo_ids: list[str], wound_id
             data=msgspec.json.encode(record),
             action="analysis.store",
         )
-    pair.job_id = job_id
     return job_id
 
 

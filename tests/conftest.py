@@ -95,6 +95,30 @@ def postgres_server():
     server.stop()
 
 
+def start_orthanc():
+    """A real Orthanc with its DICOMweb plugin (harness/orthanc.py), started; skipped only on a machine without it
+    and without root (as root the bootstrap installs it, so there it must be found)."""
+    import os
+
+    from harness.orthanc import OrthancMissing, OrthancServer
+
+    try:
+        server = OrthancServer()
+    except OrthancMissing as exc:
+        if os.geteuid() == 0:
+            raise
+        pytest.skip(f"{exc}; tests against a real PACS skipped")
+    return server.start()
+
+
+@pytest.fixture(scope="module")
+def orthanc():
+    """One Orthanc for a test module (loopback, temporary storage), stopped after it."""
+    server = start_orthanc()
+    yield server
+    server.stop()
+
+
 @pytest.fixture(params=["sqlite", "postgres"])
 def center_database(request, tmp_path: Path) -> str:
     """[central] database for a test run against both backends: a SQLite file, or a fresh PostgreSQL database."""

@@ -93,6 +93,7 @@ def test_migrations_apply_once_and_a_second_open_finds_nothing_to_do(center, cen
                 "c004_case_queue",
                 "c005_sealed_at_rest",
                 "c006_refused_bundles",
+                "c007_pacs_sends",
             ]
     finally:
         again.close()

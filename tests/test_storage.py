@@ -36,6 +36,7 @@ def test_migrations_are_recorded_and_applied_once(tmp_path):
         "m010_wounds",
         "m011_pictures_set_aside",
         "m012_advice_read",
+        "m013_pacs_sends",
     ]
     assert db.migrate() == []
     assert db.connection().execute("PRAGMA journal_mode").fetchone()[0] == "wal"

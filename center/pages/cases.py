@@ -19,7 +19,7 @@ from base.web.site import AuthedRequest
 from center.pages.case_view import case_view
 from schemas.accounts import Role
 from schemas.central import CaseFilter, CasePage, CaseState, NoteRequest
-from schemas.errors import InvalidInput
+from schemas.errors import InvalidInput, PacsFailed
 from schemas.transfer import SiteRole, Urgency
 from sync.peers import list_peers
 
@@ -102,7 +102,24 @@ class CasePages(Controller):
             age=age,
             parts=f"/api/v1/cases/{site_id}/{bundle_id}/parts/",
             written=request.query_params.get("written") == "1",
+            pacs_sends=services.pacs.sends(request.user, site_id, bundle_id) if services.pacs.configured else None,
         )
+
+    @post("/cases/{site_id:str}/{bundle_id:str}/pacs", sync_to_thread=True, status_code=303)
+    def send_to_pacs(
+        self,
+        site_id: SiteIdPath,
+        bundle_id: IdPath,
+        request: AuthedRequest,
+        data: FormBody,
+        services: CentralServicesDep,
+    ) -> Redirect:
+        """Forward the case to the hospital's PACS; the result, sent or failed with its reason, shows on the page."""
+        try:
+            services.pacs.send(request.user, site_id, bundle_id)
+        except PacsFailed:
+            pass  # recorded as failed with its reason, which the case page shows
+        return Redirect(path=f"/cases/{site_id}/{bundle_id}#pacs", status_code=303)
 
     @post("/cases/{site_id:str}/{bundle_id:str}/notes", sync_to_thread=True, status_code=303)
     def write_note(

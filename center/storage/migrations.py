@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from sqlite_utils import Database, Migrations
 
-from base.storage import schema
+from base.storage import pacs_sends, schema
 from sync.storage.peers import PEERS_DDL
 
 CENTRAL_SET = "burnedge-central"
@@ -170,6 +170,11 @@ def c006_refused_bundles(db: Database) -> None:
     db.execute("CREATE INDEX refused_bundles_at ON refused_bundles (refused_at)")
 
 
+def c007_pacs_sends(db: Database) -> None:
+    """Each forwarding of a received case to the hospital's PACS (base/storage/pacs_sends.py)."""
+    pacs_sends.create_table(db)
+
+
 CENTER_STEPS = (
     c001_center,
     c002_audit_anchors,
@@ -177,6 +182,7 @@ CENTER_STEPS = (
     c004_case_queue,
     c005_sealed_at_rest,
     c006_refused_bundles,
+    c007_pacs_sends,
 )
 central_migrations = Migrations(CENTRAL_SET)
 for _step in CENTER_STEPS:

@@ -31,7 +31,7 @@ SURFACE = "surface/burn_surface.glb"
 OFFSET = re.compile(r"[+-](0\d|1[0-4]):[0-5]\d")
 
 
-def _taken(asset: Asset) -> str | None:
+def taken(asset: Asset) -> str | None:
     """When the camera says the photo was taken, as FHIR dateTime; None without a time zone (EXIF's own
     DateTimeOriginal has none) or in a form not understood."""
     meta = asset.metadata
@@ -47,7 +47,7 @@ def _taken(asset: Asset) -> str | None:
 
 
 def _photo(path: Path, asset: Asset) -> Attached:
-    return attached(path, f"/api/v1/assets/{asset.id}/file", asset.media_type.value, asset.filename, _taken(asset))
+    return attached(path, f"/api/v1/assets/{asset.id}/file", asset.media_type.value, asset.filename, taken(asset))
 
 
 class FhirService:

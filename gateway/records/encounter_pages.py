@@ -88,6 +88,7 @@ class EncounterPages(Controller):
             part_titles=PART_TITLES,
             act_problem=act_problem,
             act_reason=act_reason,
+            pacs_sends=services.dicom.sends(request.user, encounter_id) if services.dicom.configured else None,
         )
 
     @get("/parts/{slug:str}", sync_to_thread=False)

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from sqlite_utils import Database, Migrations
 
-from base.storage import schema
+from base.storage import pacs_sends, schema
 
 migrations = Migrations("burnedge")
 
@@ -259,3 +259,10 @@ def m012_advice_read(db: Database) -> None:
         " SELECT c.id, v.version, 'before the advice count', v.created_at FROM record_heads c"
         " JOIN record_versions v ON v.seq = c.seq WHERE c.kind = 'consultation'"
     )
+
+
+@migrations()
+def m013_pacs_sends(db: Database) -> None:
+    """Each send of an encounter to the hospital's PACS (DICOMweb): its state, the study's UID, what the PACS held
+    before and why it failed (base/storage/pacs_sends.py). A failed send marks nothing as sent."""
+    pacs_sends.create_table(db)

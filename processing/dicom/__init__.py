@@ -1,0 +1,1 @@
+"""An encounter as one DICOM study (docs/dicom.md): photos, measurements, surface and report."""
