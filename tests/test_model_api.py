@@ -23,6 +23,7 @@ def test_the_gateway_serves_the_models_version_and_fairness_table(client, auth):
     assert info.version == segmenter.metadata["version"] == report.model_version
     assert info.sha256 == report.model_sha256 and info.passes == report.passes
     assert info.fairness == report.fairness and info.real_validation == report.real_validation
+    assert info.architecture == segmenter.metadata["architecture"] and "EfficientNet-Lite0" in info.architecture
     assert client.get("/api/v1/segmentation-model").status_code == 401
 
 
