@@ -119,12 +119,21 @@ def optimiser(net: BurnUNet | LiteUNet, conf: TrainingConfig, learning_rate: flo
     return torch.optim.AdamW(groups, weight_decay=conf.weight_decay), peaks
 
 
+def training_device() -> torch.device:
+    """A GPU where torch finds one (faster; never needed), else the CPU."""
+    return torch.device("cuda" if torch.cuda.is_available() else "cpu")
+
+
+def device_of(net: torch.nn.Module) -> torch.device:
+    return next(net.parameters()).device
+
+
 def torch_network(net: BurnUNet):
     """The network as processing.segmentation.passes calls it: NCHW float32 in, (N, H, W) probability out."""
 
     def network(x: np.ndarray) -> np.ndarray:
         with torch.no_grad():
-            return torch.sigmoid(net(torch.from_numpy(x)))[:, 0].numpy()
+            return torch.sigmoid(net(torch.from_numpy(x).to(device_of(net))))[:, 0].cpu().numpy()
 
     return network
 
@@ -185,7 +194,7 @@ class Checkpoint:
         """The saved progress ({} when there is no checkpoint); refuses one made with another recipe."""
         if not self.path.exists():
             return {}
-        saved = torch.load(self.path, weights_only=False)
+        saved = torch.load(self.path, weights_only=False, map_location=device_of(net))
         if saved["recipe"] != self.recipe:
             raise InvalidInput(
                 f"{self.path} was made with another recipe; continue it with that recipe, or train into "
@@ -195,7 +204,7 @@ class Checkpoint:
         opt.load_state_dict(saved["optimizer"])
         sched.load_state_dict(saved["scheduler"])
         rng.bit_generator.state = saved["numpy_rng"]
-        torch.set_rng_state(saved["torch_rng"])
+        torch.set_rng_state(saved["torch_rng"].cpu())
         return {k: saved[k] for k in ("epoch", "loss_history", "tune_history", "train_seconds")}
 
 
@@ -241,6 +250,7 @@ def _run_stage(
         for step, (x, y) in enumerate(batches(real_train + [syn_train[i] for i in picked], conf, rng)):
             if step >= per_epoch:
                 break
+            x, y = x.to(device_of(net)), y.to(device_of(net))
             loss = loss_fn(net(x), y, conf)
             opt.zero_grad()
             loss.backward()
@@ -286,7 +296,7 @@ def train(
     continue it later)."""
     torch.manual_seed(conf.seed)
     torch.set_num_threads(conf.threads)
-    net = build_network(conf)
+    net = build_network(conf).to(training_device())
     out_dir.mkdir(parents=True, exist_ok=True)
     state = {"epoch": 0, "loss_history": [], "tune_history": [], "train_seconds": 0.0}
     healed_stage = conf.healed_stage
@@ -331,4 +341,4 @@ def run(
         log.info("stopped after epoch %d of %d: run the same command again to continue", state["epoch"], total)
         return out_dir / "curve.json"
     both = {k: synthetic[k] + healed[k] for k in synthetic}
-    return evaluate.run(conf, net, state, real, both, out_dir)
+    return evaluate.run(conf, net.cpu(), state, real, both, out_dir)  # exported and scored as the clinic runs it
