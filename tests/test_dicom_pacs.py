@@ -111,12 +111,12 @@ def test_the_command_line_sends_an_analysed_encounter_as_one_study_and_a_second_
     toml = _toml(clinic.config, tmp_path)
     assert cli(["--config", str(toml), "export", "dicom", encounter_id, "--out", str(tmp_path / "study")]) == 0
     files = sorted(p.name for p in (tmp_path / "study").iterdir())
-    assert len(files) == 4 and all(dcmread(tmp_path / "study" / f).PatientID == "MRN-77" for f in files)
+    assert len(files) == 5 and all(dcmread(tmp_path / "study" / f).PatientID == "MRN-77" for f in files)
 
     assert cli(["--config", str(toml), "export", "dicom", encounter_id, "--to", "config"]) == 0
     with orthanc.client() as http:
         stats = http.get("/statistics").json()
-        assert (stats["CountPatients"], stats["CountStudies"], stats["CountInstances"]) == (1, 1, 4)
+        assert (stats["CountPatients"], stats["CountStudies"], stats["CountInstances"]) == (1, 1, 5)
         (patient,) = http.get("/patients", params={"expand": "1"}).json()
         assert patient["MainDicomTags"]["PatientID"] == "MRN-77"
         assert patient["MainDicomTags"]["PatientName"] == "Patient^Test"
@@ -126,6 +126,7 @@ def test_the_command_line_sends_an_analysed_encounter_as_one_study_and_a_second_
         "1.2.840.10008.5.1.4.1.1.88.34",  # Comprehensive 3D SR
         "1.2.840.10008.5.1.4.1.1.104.3",  # Encapsulated STL
         "1.2.840.10008.5.1.4.1.1.104.1",  # Encapsulated PDF
+        "1.2.840.10008.5.1.4.1.1.68.1",  # Surface Scan Mesh
     }
     photo = dcmread(io.BytesIO(held["1.2.840.10008.5.1.4.1.1.77.1.4"]))
     assert photo.file_meta.TransferSyntaxUID == "1.2.840.10008.1.2.4.50"  # the camera's JPEG, not re-encoded
@@ -140,14 +141,18 @@ def test_the_command_line_sends_an_analysed_encounter_as_one_study_and_a_second_
     ].ReferencedSOPInstanceUID == str(photo.SOPInstanceUID)
     pdf = dcmread(io.BytesIO(held["1.2.840.10008.5.1.4.1.1.104.1"]))
     assert bytes(pdf.EncapsulatedDocument).startswith(b"%PDF")
+    mesh = dcmread(io.BytesIO(held["1.2.840.10008.5.1.4.1.1.68.1"]))
+    assert mesh.NumberOfSurfaces == 2 and mesh.SurfaceSequence[1].SegmentedPropertyTypeCodeSequence[0].CodeValue == (
+        "48333001"  # the burn, as Orthanc keeps it
+    )
 
     assert cli(["--config", str(toml), "export", "dicom", encounter_id, "--to", "config"]) == 0
     with orthanc.client() as http:
         again = http.get("/statistics").json()
-        assert (again["CountPatients"], again["CountStudies"], again["CountInstances"]) == (1, 1, 4)
+        assert (again["CountPatients"], again["CountStudies"], again["CountInstances"]) == (1, 1, 5)
     sends = clinic.services.dicom.sends(None, encounter_id)
     assert [s.state for s in sends] == [PacsSendState.sent, PacsSendState.sent]
-    assert (sends[0].instances, sends[0].already_there) == (4, 4)  # the newest: everything was there already
+    assert (sends[0].instances, sends[0].already_there) == (5, 5)  # the newest: everything was there already
     actions = [
         r[0]
         for r in clinic.services.db.connection().execute(
@@ -170,9 +175,9 @@ def test_the_encounter_page_sends_and_a_stopped_pacs_is_a_clear_error_with_nothi
             sent = post_form(http, f"/encounters/{encounter_id}/pacs", {}, from_page=f"/encounters/{encounter_id}")
             assert sent.status_code == 303 and sent.headers["location"].endswith("#pacs")
             shown = http.get(f"/encounters/{encounter_id}").text
-            assert 'data-pacs-state="sent"' in shown and "4 objects" in shown
+            assert 'data-pacs-state="sent"' in shown and "5 objects" in shown
             with orthanc.client() as pacs:
-                assert pacs.get("/statistics").json()["CountInstances"] == 4
+                assert pacs.get("/statistics").json()["CountInstances"] == 5
 
             orthanc.halt()
             r = post_form(http, f"/encounters/{encounter_id}/pacs", {}, from_page=f"/encounters/{encounter_id}")
@@ -202,7 +207,7 @@ def test_a_partial_stow_answer_or_a_4xx_is_a_clear_error_and_a_retry_stores_each
     try:
         target = web.Endpoint(orthanc.dicomweb_url, PACS_USER, PACS_PASSWORD, timeout_s=20)
         study = build(study_input())
-        stranger = build(study_input()).instances[-1]  # another encounter's report: Orthanc refuses it here
+        stranger = build(study_input()).instances[-1]  # another encounter's mesh: Orthanc refuses it here
         with pytest.raises(PacsFailed, match=r"stored only part of the study: 1 of 4 objects refused") as partial:
             web.send(Study(study.study_uid, study.instances[:3] + [stranger]), target)
         assert "nothing was marked as sent" in partial.value.detail
@@ -212,9 +217,9 @@ def test_a_partial_stow_answer_or_a_4xx_is_a_clear_error_and_a_retry_stores_each
         with pytest.raises(PacsFailed, match=r"refused the request \(404: Unknown resource\)"):
             web.send(study, web.Endpoint(orthanc.dicomweb_url + "/no-such-root", PACS_USER, PACS_PASSWORD))
         done = web.send(study, target)
-        assert (done.instances, done.already_there) == (6, 3)  # the three the partial send stored
+        assert (done.instances, done.already_there) == (7, 3)  # the three the partial send stored
         with orthanc.client() as http:
             stats = http.get("/statistics").json()
-        assert (stats["CountStudies"], stats["CountInstances"]) == (1, 6)  # each object once; the stranger refused
+        assert (stats["CountStudies"], stats["CountInstances"]) == (1, 7)  # each object once; the stranger refused
     finally:
         orthanc.stop()
