@@ -88,7 +88,9 @@ def test_a_center_without_a_configured_pacs_offers_no_send(pair):
     try:
         with pair.consultant() as consultant:
             page = consultant.get(pair.case_url).text
+            asked = post_form(consultant, f"{pair.case_url}/pacs", {}, from_page=pair.case_url)
         assert "hospital's PACS" not in page and 'id="pacs"' not in page
+        assert asked.status_code == 409 and "no PACS is configured" in asked.text  # a hand-made POST: said, not sent
     finally:
         pair.center.pacs = configured
 
