@@ -86,6 +86,30 @@ def test_a_surface_with_no_paint_has_the_skin_alone():
     assert paint.alpha_at(0.5) == pytest.approx(0.4)  # the share the burn's boundary is read at
 
 
+def test_the_burn_read_from_the_paint_is_where_the_fused_probability_is_at_least_a_half():
+    """The paint over a skin whose colour varies from vertex to vertex, stored in 8 bits as burn_surface.glb is:
+    every vertex with q >= 0.5 is read as burn, and next to none below."""
+    import trimesh
+
+    from processing.dicom.mesh import painted
+
+    rng = np.random.default_rng(7)
+    grid = trimesh.creation.box(extents=(60, 60, 1)).subdivide().subdivide().subdivide().subdivide()
+    q = np.exp(-np.sum(grid.vertices[:, :2] ** 2, axis=1) / (2 * 12.0**2))  # a burn in the middle, fading out
+    q[grid.vertices[:, 0] > 25] = np.nan  # not looked at
+    skin = np.clip(SKIN + rng.normal(0, 0.03, (len(q), 3)), 0, 1)
+    alpha = paint.alpha(q)[:, None]
+    colours = ((skin * (1 - alpha) + paint.PAINT * alpha) * 255).round().astype(np.uint8)
+    glb = trimesh.exchange.gltf.export_glb(
+        trimesh.Scene(trimesh.Trimesh(grid.vertices, grid.faces, process=False, vertex_colors=colours))
+    )
+    surface = painted(glb)
+    read = surface.share >= paint.alpha_at(0.5) - 0.02
+    truth = np.nan_to_num(q) >= 0.5
+    assert truth.sum() > 50 and np.all(read[truth])  # no burn vertex lost
+    assert (read & ~truth).sum() <= 0.03 * truth.sum()  # and few taken from the edge around it
+
+
 def _dicom3tools() -> None:
     if not (shutil.which("dciodvfy") and shutil.which("dcentvfy")):
         pytest.skip("dicom3tools is not installed (apt-get install dicom3tools; deploy/bootstrap.sh --test does)")
