@@ -9,6 +9,7 @@ do. DICOM has no per-vertex colour in a mesh; each surface carries its Recommend
 
 from __future__ import annotations
 
+import datetime as dt
 import io
 from dataclasses import dataclass
 
@@ -28,7 +29,12 @@ ROUNDING = 0.02
 """The glTF's colours are 8-bit: a vertex painted exactly at the boundary may read a little under its share."""
 SKIN_GREY = np.array([0.7, 0.7, 0.7])
 """What burn_surface.glb gives a mesh that had no colours of its own."""
+UNPAINTED = 0.1
+"""A vertex with less paint than this is the skin's own colour (give or take its variation)."""
 ALGORITHM = "burnedge 3D burn analysis"
+BURN_INJURY = Code("48333001", "SCT", "Burn injury")
+"""SNOMED CT 48333001 |Burn injury (morphologic abnormality)|, as a Segmented Property Type under CID 7150's
+Morphologically Abnormal Structure (docs/dicom.md: not in pydicom's dictionary)."""
 
 
 @dataclass(frozen=True)
@@ -43,6 +49,10 @@ class Painted:
     def burn_faces(self) -> np.ndarray:
         painted = self.share >= paint.alpha_at(LEVEL) - ROUNDING
         return self.faces[np.all(painted[self.faces], axis=1)]
+
+    def skin_colour(self) -> np.ndarray:
+        unpainted = self.share < UNPAINTED
+        return np.median(self.colours[unpainted], axis=0) if unpainted.any() else SKIN_GREY
 
 
 def instance_uid(job_id: str) -> str:
@@ -69,14 +79,14 @@ def _paint_share(colours: np.ndarray) -> np.ndarray:
     for _ in range(2):
         towards = paint.PAINT - skin
         share = np.clip((colours - skin) @ towards / max(float(towards @ towards), 1e-9), 0, 1)
-        calm = share < 0.1
-        if not calm.any():
+        unpainted = share < UNPAINTED
+        if not unpainted.any():
             break
-        skin = np.median(colours[calm], axis=0)
+        skin = np.median(colours[unpainted], axis=0)
     return share
 
 
-def mesh(study: StudyInput, analysis: Analysis, photos: list[Dataset], number: int) -> Dataset:
+def mesh(study: StudyInput, analysis: Analysis, number: int) -> Dataset:
     record = analysis.record
     completed = identity.parse_iso(record.completed_at) or study.made_at
     ds = common.dataset(study, common.MESH, SurfaceScanMeshStorage, instance_uid(record.job_id), number, completed)
@@ -88,8 +98,7 @@ def mesh(study: StudyInput, analysis: Analysis, photos: list[Dataset], number: i
     ds.Laterality = side[1][1] if side and side[1] and side[1][1] in ("L", "R") else ""
     ds.ManufacturerModelName = ALGORITHM
     ds.DeviceSerialNumber = "none"
-    _scan_procedure(ds, study, analysis, photos, completed)
-    skin_colour = np.median(surface.colours[surface.share < 0.1], axis=0) if (surface.share < 0.1).any() else SKIN_GREY
+    _scan_procedure(ds, study, analysis, completed)
     surfaces = [
         _surface(
             1,
@@ -97,7 +106,7 @@ def mesh(study: StudyInput, analysis: Analysis, photos: list[Dataset], number: i
             surface.faces,
             "the reconstructed skin surface, in mm",
             (codes.SCT.Tissue, codes.SCT.Skin),
-            skin_colour,
+            surface.skin_colour(),
         )
     ]
     burn = surface.burn_faces()
@@ -117,12 +126,7 @@ def mesh(study: StudyInput, analysis: Analysis, photos: list[Dataset], number: i
     return ds
 
 
-BURN_INJURY = Code("48333001", "SCT", "Burn injury")
-"""SNOMED CT 48333001 |Burn injury (morphologic abnormality)|, as a Segmented Property Type under CID 7150's
-Morphologically Abnormal Structure (docs/dicom.md: not in pydicom's dictionary)."""
-
-
-def _scan_procedure(ds: Dataset, study: StudyInput, analysis: Analysis, photos: list[Dataset], done) -> None:
+def _scan_procedure(ds: Dataset, study: StudyInput, analysis: Analysis, done: dt.datetime) -> None:
     """Scan Procedure: the photos are the scan; its start is the first camera time, its length their span."""
     times = sorted(p.taken_at for p in study.photos if p.taken_at and p.asset_id in analysis.record.assets)
     start = times[0] if times else (identity.parse_iso(analysis.record.requested_at) or done)

@@ -55,7 +55,7 @@ def build(study: StudyInput) -> Study:
             reports.append(measurements.report(study, analysis, used, len(reports) + 1))
         if surface.exportable(analysis):
             surfaces.append(surface.surface(study, analysis, used, len(surfaces) + 1))
-            meshes.append(mesh.mesh(study, analysis, used, len(meshes) + 1))
+            meshes.append(mesh.mesh(study, analysis, len(meshes) + 1))
     instances += reports + surfaces
     if study.report_pdf:
         instances.append(report.report_pdf(study, study.report_pdf, 1))
