@@ -150,6 +150,10 @@ def test_without_a_configured_pacs_the_page_offers_no_send(tmp_path):
         sign_in(http, "clin", next=f"/encounters/{encounter_id}")
         page = http.get(f"/encounters/{encounter_id}").text
         assert "hospital's PACS" not in page and 'id="pacs"' not in page
+        url = f"/encounters/{encounter_id}"
+        asked = post_form(http, f"{url}/pacs", {}, from_page=url)  # a hand-made POST: said, nothing recorded
+        assert asked.status_code == 409 and "no PACS is configured" in asked.text
+    assert clinic.services.dicom.sends(None, encounter_id) == []
     with pytest.raises(Exception, match="no PACS is configured"):
         clinic.services.dicom.send(None, encounter_id)
 
