@@ -1,7 +1,7 @@
 """Forwarding a received case to the burn center's own hospital PACS (docs/dicom.md): the case as the clinic sent
 it (its record, patient, wounds, analyses with their surfaces, photos and report) made into the same DICOM study the
-clinic would make (processing/dicom), sent over DICOMweb, each send recorded (base/storage/pacs_sends.py) and
-audited, as at the clinic."""
+clinic would make (processing/dicom), sent over DICOMweb, each send recorded and
+audited as at the clinic (base/pacs.py)."""
 
 from __future__ import annotations
 
@@ -9,17 +9,14 @@ import datetime as dt
 
 import msgspec
 
-from base import __version__
+from base import __version__, pacs
 from base.accounts.permissions import Principal
-from base.storage import audit, pacs_sends
 from processing.dicom import web
 from processing.dicom.inputs import Analysis, Photo, StudyInput
 from processing.dicom.study import Study, build
-from schemas.base import iso, utcnow
 from schemas.config import Config
-from schemas.dicom import PacsSend, PacsSendState
-from schemas.errors import PacsFailed
-from schemas.ids import uuid7
+from schemas.dicom import PacsSend
+from schemas.errors import PacsNotConfigured
 from schemas.jobs import BurnAnalysis
 from schemas.patient import Encounter, Patient
 from schemas.records import EncounterRecord, Record
@@ -27,8 +24,6 @@ from schemas.wound import Wound
 
 SURFACE = "surface/burn_surface.glb"
 MEDIA = {".jpg": "image/jpeg", ".png": "image/png", ".heic": "image/heic"}
-STALE_S = 60
-"""A send still "sending" this long after it started was cut short (the server stopped): shown as failed."""
 
 
 class CenterPacsService:
@@ -87,57 +82,22 @@ class CenterPacsService:
     def send(self, who: Principal, site_id: str, bundle_id: str) -> PacsSend:
         """Send the case to [dicom] endpoint; the send as recorded. A failure is recorded, audited and raised as
         PacsFailed: nothing is marked as sent."""
+        if not self.configured:
+            raise PacsNotConfigured("no PACS is configured at this burn center: set [dicom] endpoint (docs/dicom.md)")
         target = web.endpoint(self.config.dicom)
         study = self.study(who, site_id, bundle_id)
-        subject = _subject(site_id, bundle_id)
-        started = PacsSend(
-            id=uuid7(),
-            subject_id=subject,
-            endpoint=target.shown,
-            state=PacsSendState.sending,
-            study_uid=study.study_uid,
-            requested_by=who.username,
-            started_at=iso(utcnow()),
-            instances=len(study.instances),
+        subject = pacs.Subject(
+            kind="case", record_id=_subject(site_id, bundle_id), requested_by=who.username, user_id=who.user_id
         )
-        with self.db.write() as conn:
-            pacs_sends.begin(conn, started)
-        try:
-            outcome = web.send(study, target)
-        except PacsFailed as exc:
-            with self.db.write() as conn:
-                pacs_sends.finish(conn, started.id, PacsSendState.failed, iso(utcnow()), error=exc.detail)
-                _audit(conn, who, subject, "dicom.send_failed", exc.detail)
-            raise
-        with self.db.write() as conn:
-            pacs_sends.finish(
-                conn,
-                started.id,
-                PacsSendState.sent,
-                iso(utcnow()),
-                instances=outcome.instances,
-                already_there=outcome.already_there,
-            )
-            detail = (
-                f"study {outcome.study_uid} to {outcome.endpoint}: {outcome.instances} objects stored"
-                f" ({outcome.already_there} already there)"
-            )
-            _audit(conn, who, subject, "dicom.send", detail)
-        return self.sends(who, site_id, bundle_id)[0]
+        return pacs.send_recorded(
+            self.db, subject, target.shown, study.study_uid, len(study.instances), lambda: web.send(study, target)
+        )
 
     def sends(self, who: Principal, site_id: str, bundle_id: str) -> list[PacsSend]:
         """The case's sends, newest first (a send cut short by a stopped server reads as failed)."""
         self.cases.case(who, site_id, bundle_id)  # the same check as reading the case
-        with self.db.read() as conn:
-            found = pacs_sends.of_subject(conn, _subject(site_id, bundle_id))
-        return [pacs_sends.settled(s, STALE_S) for s in found]
+        return pacs.sends_of(self.db, _subject(site_id, bundle_id))
 
 
 def _subject(site_id: str, bundle_id: str) -> str:
     return f"{site_id}/{bundle_id}"
-
-
-def _audit(conn, who: Principal, subject: str, action: str, detail: str) -> None:
-    audit.append(
-        conn, action=action, user_id=who.user_id, device_id=None, kind="case", record_id=subject, detail=detail
-    )

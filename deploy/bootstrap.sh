@@ -5,14 +5,15 @@
 # --test also installs Debian's chromium, the headless browser the page tests drive (Playwright), and its
 # postgresql, the server the burn center's PostgreSQL tests start in a temporary folder (harness/postgres.py), and
 # orthanc with orthanc-dicomweb, the PACS the DICOM tests start on loopback with their own configuration
-# (harness/orthanc.py; the system service Debian sets up is not used by them).
+# (harness/orthanc.py; the system service Debian sets up is not used by them), and dicom3tools, whose dciodvfy
+# and dcentvfy check every DICOM object the export writes against the standard's rules (tests/test_dicom_mesh.py).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 PYTHON=${PYTHON:-python3}
 SYSTEM_PACKAGES=(libusb-1.0-0 libgl1 libegl1 libx11-6 libudev1 libgomp1 poppler-utils)
 case "${1:-}" in
-    --test) SYSTEM_PACKAGES+=(chromium postgresql libnss3-tools orthanc orthanc-dicomweb) ;;
+    --test) SYSTEM_PACKAGES+=(chromium postgresql libnss3-tools orthanc orthanc-dicomweb dicom3tools) ;;
     "") ;;
     *)
         echo "bootstrap: unknown argument $1 (the only one is --test)" >&2

@@ -27,6 +27,7 @@ from gateway.capture.settings_controller import CaptureSettingsController
 from gateway.capture.upload_controller import UploadController
 from gateway.dependencies import Services, provide_services
 from gateway.documents.fhir_controller import FhirController
+from gateway.documents.pacs_controller import PacsController
 from gateway.documents.report_controller import ReportController
 from gateway.https_gate import PlainHttpGate
 from gateway.jobs.supervisor import Workers
@@ -68,6 +69,7 @@ def create_app(config: Config, *, start_workers: bool = False) -> Litestar:
             DecisionSupportController,
             ReportController,
             FhirController,
+            PacsController,
             SyncController,
             CompanionAppController,
             UploadController,

@@ -221,6 +221,13 @@ class ModelExportError(BurnedgeError):
     title = "The model's export failed its check"
 
 
+class PacsNotConfigured(Conflict):
+    """A send to the hospital's PACS was asked of a server without `[dicom] endpoint`."""
+
+    slug = "pacs-not-configured"
+    title = "No PACS is configured"
+
+
 class PacsFailed(BurnedgeError):
     """The PACS could not be reached, refused the study (a 4xx) or stored only part of it: nothing is marked as
     sent, and sending again stores each object once (its UIDs are stable)."""

@@ -12,7 +12,6 @@ from contextlib import contextmanager
 from pathlib import Path
 
 import msgspec
-import trimesh
 from litestar.testing import TestClient
 
 from base import folders
@@ -33,6 +32,7 @@ from schemas.transfer import SiteRole
 from sync import peers
 from sync.keys import init_keys
 from tests.conftest import FAST_SECURITY
+from tests.dicom_inputs import painted_box
 from tests.pages_helpers import sign_in
 
 SURFACE = "surface/burn_surface.glb"
@@ -103,7 +103,7 @@ def store_analysis_at(clinic, config: Config, encounter_id: str, photo_ids: list
     )
     folder = folders.analysis_dir(config, job_id)
     (folder / "surface").mkdir(parents=True)
-    (folder / SURFACE).write_bytes(trimesh.creation.box().export(file_type="glb"))
+    (folder / SURFACE).write_bytes(painted_box())  # a box in mm, half of it painted as burnt
     (folder / "analysis.json").write_bytes(msgspec.json.encode(result))
     with clinic.db.write() as conn:
         audit.insert_server_record(

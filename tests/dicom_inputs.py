@@ -1,5 +1,5 @@
 """A study's inputs built in memory for the DICOM writer's unit tests: a patient, an encounter in a +01:00 zone, a
-wound of the left forearm, two camera JPEGs and a PNG, one finished scaled analysis with its painted surface, and
+wound of the left forearm, two camera JPEGs and a PNG, one finished scaled analysis with its painted surface (a box, half of it burnt), and
 a small PDF."""
 
 from __future__ import annotations
@@ -11,6 +11,7 @@ import numpy as np
 import trimesh
 from PIL import Image
 
+from processing.analysis import paint
 from processing.dicom.inputs import Analysis, Photo, StudyInput
 from schemas.analysis import AnalysisResult, AnalysisStatus, BurnMetrics, ConfidenceRecord, ScaleSummary
 from schemas.burn_chart import LundBrowderRegion
@@ -37,6 +38,20 @@ def png(seed: int, size=(64, 48)) -> bytes:
     out = io.BytesIO()
     Image.fromarray(rng.integers(0, 255, (size[1], size[0], 3), dtype=np.uint8)).save(out, format="PNG")
     return out.getvalue()
+
+
+SKIN = np.array([0.82, 0.62, 0.52])
+
+
+def painted_box(extents=(40, 30, 5)) -> bytes:
+    """A box (mm) painted as burn_surface.glb paints a burn (processing/analysis/paint.py): q = 0.9 where x > 0, the
+    skin's colour elsewhere."""
+    box = trimesh.creation.box(extents=extents).subdivide().subdivide()
+    q = np.where(box.vertices[:, 0] > 0, 0.9, np.nan)
+    alpha = paint.alpha(q)[:, None]
+    colours = SKIN * (1 - alpha) + paint.PAINT * alpha
+    tri = trimesh.Trimesh(box.vertices, box.faces, process=False, vertex_colors=(colours * 255).astype(np.uint8))
+    return trimesh.exchange.gltf.export_glb(trimesh.Scene(tri))
 
 
 def analysis_record(encounter_id: str, assets: list[str], wound_id: str | None, **metrics) -> BurnAnalysis:
@@ -91,7 +106,7 @@ def study_input(**patient) -> StudyInput:
         Photo(uuid7(), png(3), "image/png", "c.png"),
     ]
     record = analysis_record(encounter.id, [p.asset_id for p in photos], wound.id)
-    glb = trimesh.creation.box(extents=(40, 30, 5)).export(file_type="glb")
+    glb = painted_box()
     return StudyInput(
         patient=person,
         encounter=encounter,

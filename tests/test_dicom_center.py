@@ -52,10 +52,10 @@ def test_a_consultant_forwards_the_case_to_the_pacs_as_one_study_and_again_adds_
         r = post_form(consultant, f"{pair.case_url}/pacs", {}, from_page=pair.case_url)
         assert r.status_code == 303 and r.headers["location"].endswith("#pacs")
         shown = consultant.get(pair.case_url).text
-        assert 'data-pacs-state="sent"' in shown and "4 objects" in shown
+        assert 'data-pacs-state="sent"' in shown and "5 objects" in shown
         with orthanc.client() as http:
             stats = http.get("/statistics").json()
-            assert (stats["CountPatients"], stats["CountStudies"], stats["CountInstances"]) == (1, 1, 4)
+            assert (stats["CountPatients"], stats["CountStudies"], stats["CountInstances"]) == (1, 1, 5)
             (patient,) = http.get("/patients", params={"expand": "1"}).json()
             assert patient["MainDicomTags"]["PatientID"] == f"BE-{pair.patient_id}"  # the configured rule
             classes = set()
@@ -67,12 +67,13 @@ def test_a_consultant_forwards_the_case_to_the_pacs_as_one_study_and_again_adds_
             "Comprehensive 3D SR Storage",
             "Encapsulated STL Storage",
             "Encapsulated PDF Storage",
+            "Surface Scan Mesh Storage",
         }
         post_form(consultant, f"{pair.case_url}/pacs", {}, from_page=pair.case_url)
         with orthanc.client() as http:
-            assert http.get("/statistics").json()["CountInstances"] == 4
+            assert http.get("/statistics").json()["CountInstances"] == 5
         sends = pair.center.pacs.sends(CONSULTANT, "clinic-test", pair.bundle_id)
-        assert [s.state for s in sends] == [PacsSendState.sent] * 2 and sends[0].already_there == 4
+        assert [s.state for s in sends] == [PacsSendState.sent] * 2 and sends[0].already_there == 5
         audit = (
             pair.center.db.connection()
             .execute("SELECT action FROM audit_log WHERE action LIKE 'dicom.%' ORDER BY seq")
@@ -87,7 +88,9 @@ def test_a_center_without_a_configured_pacs_offers_no_send(pair):
     try:
         with pair.consultant() as consultant:
             page = consultant.get(pair.case_url).text
+            asked = post_form(consultant, f"{pair.case_url}/pacs", {}, from_page=pair.case_url)
         assert "hospital's PACS" not in page and 'id="pacs"' not in page
+        assert asked.status_code == 409 and "no PACS is configured" in asked.text  # a hand-made POST: said, not sent
     finally:
         pair.center.pacs = configured
 

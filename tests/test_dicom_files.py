@@ -16,6 +16,7 @@ from pydicom.uid import (
     EncapsulatedSTLStorage,
     ExplicitVRLittleEndian,
     JPEGBaseline8Bit,
+    SurfaceScanMeshStorage,
     VLPhotographicImageStorage,
 )
 
@@ -49,6 +50,11 @@ REQUIRED = {
         *("ConversionType", "BurnedInAnnotation", "DocumentTitle", "ConceptNameCodeSequence"),
         *("MIMETypeOfEncapsulatedDocument", "EncapsulatedDocument", "ContentDate", "ContentTime"),
     ),
+    SurfaceScanMeshStorage: (
+        *("FrameOfReferenceUID", "PositionReferenceIndicator", "ManufacturerModelName", "DeviceSerialNumber"),
+        *("SoftwareVersions", "AcquisitionDateTime", "SurfaceScanAcquisitionTypeCodeSequence"),
+        *("SurfaceScanModeCodeSequence", "ShotDurationTime", "NumberOfSurfaces", "SurfaceSequence"),
+    ),
 }
 
 
@@ -64,7 +70,8 @@ def test_every_object_reads_back_with_the_attributes_its_iod_requires():
     inputs = study_input()
     datasets = _read(build(inputs))
     assert sorted(str(ds.SOPClassUID) for ds in datasets) == sorted(
-        [VLPhotographicImageStorage] * 3 + [Comprehensive3DSRStorage, EncapsulatedSTLStorage, EncapsulatedPDFStorage]
+        [VLPhotographicImageStorage] * 3
+        + [Comprehensive3DSRStorage, EncapsulatedSTLStorage, EncapsulatedPDFStorage, SurfaceScanMeshStorage]
     )
     for ds in datasets:
         assert ds.preamble is not None and ds.file_meta.MediaStorageSOPInstanceUID == ds.SOPInstanceUID
@@ -73,7 +80,7 @@ def test_every_object_reads_back_with_the_attributes_its_iod_requires():
         assert ds.PatientID == "MRN-4471" and str(ds.PatientName) == "Okafor^Amara" and ds.PatientSex == "F"
         assert ds.StudyInstanceUID == datasets[0].StudyInstanceUID
         assert ds.TimezoneOffsetFromUTC == "+0100" and ds.StudyDate == "20261113" and ds.StudyTime == "053000"
-    assert len({ds.SeriesInstanceUID for ds in datasets}) == 4
+    assert len({ds.SeriesInstanceUID for ds in datasets}) == 5
     assert len({ds.SOPInstanceUID for ds in datasets}) == len(datasets)
 
 
@@ -154,7 +161,7 @@ def test_uids_are_stable_so_a_second_export_replaces_and_never_doubles():
 def test_a_patient_without_a_record_number_gets_one_by_the_rule_never_an_empty_patient_id():
     unknown = study_input(given_name="", family_name="", medical_record_number=None, temporary_label="Unknown man")
     (photo, *_rest) = build(unknown).instances
-    assert photo.PatientID == f"BE-{unknown.patient.id}" and str(photo.PatientName) == "Unknown man"
+    assert photo.PatientID == f"BE-{unknown.patient.id}" and str(photo.PatientName) == "Unknown man^"
     ruled = msgspec.structs.replace(study_input(), patient_id_rule=PatientIdRule.burnedge_id, patient_id_prefix="X-")
     assert {ds.PatientID for ds in build(ruled).instances} == {f"X-{ruled.patient.id}"}
 
@@ -172,7 +179,7 @@ def test_an_unscaled_analysis_gets_no_figure_in_cm_nor_a_surface_and_a_failed_on
     record = msgspec.structs.replace(analysis.record, result=result)
     inputs = msgspec.structs.replace(inputs, analyses=[msgspec.structs.replace(analysis, record=record)])
     datasets = build(inputs).instances
-    assert _of(datasets, EncapsulatedSTLStorage) == []
+    assert _of(datasets, EncapsulatedSTLStorage) == [] and _of(datasets, SurfaceScanMeshStorage) == []
     reports = _of(datasets, Comprehensive3DSRStorage)
     if status is AnalysisStatus.failed:
         assert reports == []

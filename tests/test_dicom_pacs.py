@@ -7,73 +7,25 @@ once."""
 from __future__ import annotations
 
 import io
-from pathlib import Path
 
 import pytest
 from litestar.testing import TestClient
 from pydicom import dcmread
 
 from burnedge.cli import main as cli
-from burnedge.demo_client import GatewayClient
-from gateway.app import create_app
-from harness.bodies import encounter_body, patient_body, wound_body
 from harness.orthanc import PASSWORD as PACS_PASSWORD
 from harness.orthanc import USER as PACS_USER
-from harness.processes import PASSWORD
-from harness.sites import noise_photo
 from processing.dicom import web
 from processing.dicom.measurements import RELIEF_MAX
 from processing.dicom.study import Study, build
-from schemas.accounts import Role, UserCreate
-from schemas.config import Config, DicomConfig, GatewayConfig
 from schemas.dicom import PacsSendState
 from schemas.errors import PacsFailed
-from tests.center_pair import store_analysis_at
-from tests.conftest import FAST_SECURITY, start_orthanc
+from tests.conftest import start_orthanc
+from tests.dicom_clinic import Clinic, clinic_toml
 from tests.dicom_inputs import study_input
 from tests.pages_helpers import post_form, sign_in
 
 AREA = 18.4  # tests/center_pair.py's analysis
-
-
-def _config(folder: Path, endpoint: str) -> Config:
-    secret = folder / "pacs-password"
-    secret.write_text(PACS_PASSWORD + "\n")
-    dicom = DicomConfig(endpoint=endpoint, username=PACS_USER, password_file=str(secret), timeout_s=20)
-    return Config(gateway=GatewayConfig(database=str(folder / "clinic.sqlite3")), security=FAST_SECURITY, dicom=dicom)
-
-
-def _toml(config: Config, folder: Path) -> Path:
-    d = config.dicom
-    path = folder / "burnedge.toml"
-    path.write_text(
-        f'[gateway]\ndatabase = "{config.gateway.database}"\n'
-        f'[dicom]\nendpoint = "{d.endpoint}"\nusername = "{d.username}"\npassword_file = "{d.password_file}"\n'
-    )
-    return path
-
-
-class Clinic:
-    def __init__(self, folder: Path, endpoint: str):
-        self.folder = folder
-        self.config = _config(folder, endpoint)
-        self.app = create_app(self.config)
-        self.services = self.app.state.services
-        self.services.accounts.create_user(None, UserCreate(username="clin", password=PASSWORD, role=Role.clinician))
-
-    def analysed_encounter(self, http: TestClient) -> str:
-        """A patient with a medical record number, an encounter, a wound of the left forearm, a camera JPEG of it and
-        a finished analysis of it (stored as the job runner stores one)."""
-        api = GatewayClient(http=http)
-        api.login("clin", PASSWORD)
-        patient = api.post("/api/v1/patients", patient_body(medical_record_number="MRN-77"), "patient")
-        patient_id = patient["meta"]["id"]
-        encounter_id = api.post("/api/v1/encounters", encounter_body(patient_id), "encounter")["meta"]["id"]
-        wound = api.post(f"/api/v1/patients/{patient_id}/wounds", wound_body(patient_id), "wound")
-        photo = api.upload(noise_photo(self.folder / "photo.jpg", 1, size=(640, 480)), encounter_id)
-        store_analysis_at(self.services, self.config, encounter_id, [photo["asset"]["id"]], wound["meta"]["id"])
-        http.headers.pop("Authorization", None)
-        return encounter_id
 
 
 def _instances(orthanc) -> list[tuple[str, bytes]]:
@@ -108,15 +60,15 @@ def test_the_command_line_sends_an_analysed_encounter_as_one_study_and_a_second_
     clinic = Clinic(tmp_path, orthanc.dicomweb_url)
     with TestClient(clinic.app) as http:
         encounter_id = clinic.analysed_encounter(http)
-    toml = _toml(clinic.config, tmp_path)
+    toml = clinic_toml(clinic.config, tmp_path)
     assert cli(["--config", str(toml), "export", "dicom", encounter_id, "--out", str(tmp_path / "study")]) == 0
     files = sorted(p.name for p in (tmp_path / "study").iterdir())
-    assert len(files) == 4 and all(dcmread(tmp_path / "study" / f).PatientID == "MRN-77" for f in files)
+    assert len(files) == 5 and all(dcmread(tmp_path / "study" / f).PatientID == "MRN-77" for f in files)
 
     assert cli(["--config", str(toml), "export", "dicom", encounter_id, "--to", "config"]) == 0
     with orthanc.client() as http:
         stats = http.get("/statistics").json()
-        assert (stats["CountPatients"], stats["CountStudies"], stats["CountInstances"]) == (1, 1, 4)
+        assert (stats["CountPatients"], stats["CountStudies"], stats["CountInstances"]) == (1, 1, 5)
         (patient,) = http.get("/patients", params={"expand": "1"}).json()
         assert patient["MainDicomTags"]["PatientID"] == "MRN-77"
         assert patient["MainDicomTags"]["PatientName"] == "Patient^Test"
@@ -126,6 +78,7 @@ def test_the_command_line_sends_an_analysed_encounter_as_one_study_and_a_second_
         "1.2.840.10008.5.1.4.1.1.88.34",  # Comprehensive 3D SR
         "1.2.840.10008.5.1.4.1.1.104.3",  # Encapsulated STL
         "1.2.840.10008.5.1.4.1.1.104.1",  # Encapsulated PDF
+        "1.2.840.10008.5.1.4.1.1.68.1",  # Surface Scan Mesh
     }
     photo = dcmread(io.BytesIO(held["1.2.840.10008.5.1.4.1.1.77.1.4"]))
     assert photo.file_meta.TransferSyntaxUID == "1.2.840.10008.1.2.4.50"  # the camera's JPEG, not re-encoded
@@ -140,14 +93,18 @@ def test_the_command_line_sends_an_analysed_encounter_as_one_study_and_a_second_
     ].ReferencedSOPInstanceUID == str(photo.SOPInstanceUID)
     pdf = dcmread(io.BytesIO(held["1.2.840.10008.5.1.4.1.1.104.1"]))
     assert bytes(pdf.EncapsulatedDocument).startswith(b"%PDF")
+    mesh = dcmread(io.BytesIO(held["1.2.840.10008.5.1.4.1.1.68.1"]))
+    assert mesh.NumberOfSurfaces == 2 and mesh.SurfaceSequence[1].SegmentedPropertyTypeCodeSequence[0].CodeValue == (
+        "48333001"  # the burn, as Orthanc keeps it
+    )
 
     assert cli(["--config", str(toml), "export", "dicom", encounter_id, "--to", "config"]) == 0
     with orthanc.client() as http:
         again = http.get("/statistics").json()
-        assert (again["CountPatients"], again["CountStudies"], again["CountInstances"]) == (1, 1, 4)
+        assert (again["CountPatients"], again["CountStudies"], again["CountInstances"]) == (1, 1, 5)
     sends = clinic.services.dicom.sends(None, encounter_id)
     assert [s.state for s in sends] == [PacsSendState.sent, PacsSendState.sent]
-    assert (sends[0].instances, sends[0].already_there) == (4, 4)  # the newest: everything was there already
+    assert (sends[0].instances, sends[0].already_there) == (5, 5)  # the newest: everything was there already
     actions = [
         r[0]
         for r in clinic.services.db.connection().execute(
@@ -170,9 +127,9 @@ def test_the_encounter_page_sends_and_a_stopped_pacs_is_a_clear_error_with_nothi
             sent = post_form(http, f"/encounters/{encounter_id}/pacs", {}, from_page=f"/encounters/{encounter_id}")
             assert sent.status_code == 303 and sent.headers["location"].endswith("#pacs")
             shown = http.get(f"/encounters/{encounter_id}").text
-            assert 'data-pacs-state="sent"' in shown and "4 objects" in shown
+            assert 'data-pacs-state="sent"' in shown and "5 objects" in shown
             with orthanc.client() as pacs:
-                assert pacs.get("/statistics").json()["CountInstances"] == 4
+                assert pacs.get("/statistics").json()["CountInstances"] == 5
 
             orthanc.halt()
             r = post_form(http, f"/encounters/{encounter_id}/pacs", {}, from_page=f"/encounters/{encounter_id}")
@@ -193,6 +150,10 @@ def test_without_a_configured_pacs_the_page_offers_no_send(tmp_path):
         sign_in(http, "clin", next=f"/encounters/{encounter_id}")
         page = http.get(f"/encounters/{encounter_id}").text
         assert "hospital's PACS" not in page and 'id="pacs"' not in page
+        url = f"/encounters/{encounter_id}"
+        asked = post_form(http, f"{url}/pacs", {}, from_page=url)  # a hand-made POST: said, nothing recorded
+        assert asked.status_code == 409 and "no PACS is configured" in asked.text
+    assert clinic.services.dicom.sends(None, encounter_id) == []
     with pytest.raises(Exception, match="no PACS is configured"):
         clinic.services.dicom.send(None, encounter_id)
 
@@ -202,7 +163,7 @@ def test_a_partial_stow_answer_or_a_4xx_is_a_clear_error_and_a_retry_stores_each
     try:
         target = web.Endpoint(orthanc.dicomweb_url, PACS_USER, PACS_PASSWORD, timeout_s=20)
         study = build(study_input())
-        stranger = build(study_input()).instances[-1]  # another encounter's report: Orthanc refuses it here
+        stranger = build(study_input()).instances[-1]  # another encounter's mesh: Orthanc refuses it here
         with pytest.raises(PacsFailed, match=r"stored only part of the study: 1 of 4 objects refused") as partial:
             web.send(Study(study.study_uid, study.instances[:3] + [stranger]), target)
         assert "nothing was marked as sent" in partial.value.detail
@@ -212,9 +173,9 @@ def test_a_partial_stow_answer_or_a_4xx_is_a_clear_error_and_a_retry_stores_each
         with pytest.raises(PacsFailed, match=r"refused the request \(404: Unknown resource\)"):
             web.send(study, web.Endpoint(orthanc.dicomweb_url + "/no-such-root", PACS_USER, PACS_PASSWORD))
         done = web.send(study, target)
-        assert (done.instances, done.already_there) == (6, 3)  # the three the partial send stored
+        assert (done.instances, done.already_there) == (7, 3)  # the three the partial send stored
         with orthanc.client() as http:
             stats = http.get("/statistics").json()
-        assert (stats["CountStudies"], stats["CountInstances"]) == (1, 6)  # each object once; the stranger refused
+        assert (stats["CountStudies"], stats["CountInstances"]) == (1, 7)  # each object once; the stranger refused
     finally:
         orthanc.stop()

@@ -19,7 +19,8 @@ MEANING = {
     403: "Your role may not do this, a wrong current password, or your password must be changed first (after an "
     "administrator's reset only POST /api/v1/auth/password, GET /api/v1/auth/me and logout are open)",
     404: "No such record",
-    409: "Conflicts with what is stored: `current` holds the stored record where there is one",
+    409: "Conflicts with what is stored (`current` holds the stored record where there is one), or the server is not "
+    "set up for it (no PACS configured)",
     410: "The upload was finished, abandoned or has expired: start a new one",
     412: "A precondition failed: the version you edited is no longer the current one (`current` holds it), the part "
     "already exists (If-None-Match: *), or a tus request without Tus-Resumable: 1.0.0",
@@ -29,6 +30,8 @@ MEANING = {
     428: "If-Match with the version you edited (the ETag of your last read) is required",
     429: "Too many attempts: wait as long as Retry-After says",
     460: "The bytes received do not match Upload-Checksum: nothing of the request was kept",
+    502: "The hospital's PACS did not store the study (unreachable, refused, or only part of it): the failed send is "
+    "recorded, nothing is marked as sent; sending again stores each object once",
     507: "The gateway's disk has no room for this upload",
 }
 

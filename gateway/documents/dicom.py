@@ -1,6 +1,6 @@
 """The DICOM export of an encounter (docs/dicom.md): the record snapshot the clinical report is made from, that
 report, the photos the analyses used and each analysis's surface, as one study; written to a folder or sent to
-the hospital's PACS over DICOMweb, each send recorded (gateway/storage/pacs_sends.py) and audited."""
+the hospital's PACS over DICOMweb, each send recorded and audited (base/pacs.py)."""
 
 from __future__ import annotations
 
@@ -9,27 +9,24 @@ import logging
 import sqlite3
 from pathlib import Path
 
+from base import pacs
 from base.accounts.permissions import Principal, require_read
 from base.folders import media_root
 from base.storage import assets as asset_store
-from base.storage import audit, pacs_sends
+from base.storage import audit, records
 from base.storage.blobs import MediaStore
 from gateway.documents.fhir import SURFACE, taken
 from gateway.documents.reports import REPORT_KINDS, ReportService
 from processing.dicom import web
 from processing.dicom.inputs import Analysis, Photo, StudyInput
 from processing.dicom.study import Study, build
-from schemas.base import iso, utcnow
 from schemas.config import Config
-from schemas.dicom import PacsSend, PacsSendState
+from schemas.dicom import PacsSend
 from schemas.encounter_snapshot import EncounterSnapshot
-from schemas.errors import NotFound, PacsFailed
-from schemas.ids import uuid7
+from schemas.errors import NotFound, PacsNotConfigured
 from schemas.records import RecordKind
 
 log = logging.getLogger(__name__)
-STALE_S = 60
-"""A send still "sending" this long after it started was cut short (the gateway stopped): shown as failed."""
 
 
 def _who(principal: Principal | None) -> tuple[str | None, str | None]:
@@ -116,56 +113,38 @@ class DicomService:
         as failed, audited and raised as PacsFailed: nothing is marked as sent."""
         target = web.endpoint(self.config.dicom, url)
         study = self.study(principal, encounter_id, made_by)
-        by = made_by or (principal.username if principal else "gateway")
-        started = PacsSend(
-            id=uuid7(),
-            subject_id=encounter_id,
-            endpoint=target.shown,
-            state=PacsSendState.sending,
-            study_uid=study.study_uid,
-            requested_by=by,
-            started_at=iso(utcnow()),
-            instances=len(study.instances),
+        user_id, device_id = _who(principal)
+        subject = pacs.Subject(
+            kind=RecordKind.encounter.value,
+            record_id=encounter_id,
+            requested_by=made_by or (principal.username if principal else "gateway"),
+            user_id=user_id,
+            device_id=device_id,
         )
-        with self.db.write() as conn:
-            pacs_sends.begin(conn, started)
-        try:
-            outcome = web.send(study, target)
-        except PacsFailed as exc:
-            with self.db.write() as conn:
-                pacs_sends.finish(conn, started.id, PacsSendState.failed, iso(utcnow()), error=exc.detail)
-                self._audit(principal, encounter_id, "dicom.send_failed", exc.detail, conn)
-            raise
-        with self.db.write() as conn:
-            pacs_sends.finish(
-                conn,
-                started.id,
-                PacsSendState.sent,
-                iso(utcnow()),
-                instances=outcome.instances,
-                already_there=outcome.already_there,
-            )
-            detail = (
-                f"study {outcome.study_uid} to {outcome.endpoint}: {outcome.instances} objects stored"
-                f" ({outcome.already_there} already there)"
-            )
-            self._audit(principal, encounter_id, "dicom.send", detail, conn)
-        return self.sends(principal, encounter_id)[0]
+        return pacs.send_recorded(
+            self.db, subject, target.shown, study.study_uid, len(study.instances), lambda: web.send(study, target)
+        )
+
+    def send_configured(self, principal: Principal, encounter_id: str) -> PacsSend:
+        """The pages' and the API's send: only ever to [dicom] endpoint (a client never names where patient data
+        goes); 409 where none is configured."""
+        if not self.configured:
+            raise PacsNotConfigured("no PACS is configured at this gateway: set [dicom] endpoint (docs/dicom.md)")
+        return self.send(principal, encounter_id)
 
     def sends(self, principal: Principal | None, encounter_id: str) -> list[PacsSend]:
         """The encounter's sends, newest first; one left "sending" by a stopped gateway reads as failed."""
         if principal is not None:
             require_read(principal, RecordKind.encounter)
         with self.db.read() as conn:
-            found = pacs_sends.of_subject(conn, encounter_id)
-        return [pacs_sends.settled(s, STALE_S) for s in found]
+            records.get_head(conn, RecordKind.encounter, encounter_id)
+        return pacs.sends_of(self.db, encounter_id)
 
-    def _audit(self, principal, encounter_id: str, action: str, detail: str, conn=None) -> None:
+    def _audit(self, principal: Principal | None, encounter_id: str, action: str, detail: str) -> None:
         user_id, device_id = _who(principal)
-
-        def write(c):
+        with self.db.write() as conn:
             audit.append(
-                c,
+                conn,
                 action=action,
                 user_id=user_id,
                 device_id=device_id,
@@ -173,9 +152,3 @@ class DicomService:
                 record_id=encounter_id,
                 detail=detail,
             )
-
-        if conn is not None:
-            write(conn)
-            return
-        with self.db.write() as c:
-            write(c)

@@ -20,7 +20,7 @@ class EncounterPacsPages(Controller):
     @post("/pacs", sync_to_thread=True, status_code=303)
     def send(self, encounter_id: IdPath, request: AuthedRequest, data: FormBody, services: ServicesDep) -> Redirect:
         try:
-            services.dicom.send(request.user, encounter_id)
+            services.dicom.send_configured(request.user, encounter_id)
         except PacsFailed:
             pass  # recorded as failed with its reason, which the encounter page shows
         return Redirect(path=f"/encounters/{encounter_id}#pacs", status_code=303)

@@ -20,7 +20,7 @@ import open3d as o3d
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
-from processing.analysis import fusion, segment_views
+from processing.analysis import fusion, paint, segment_views
 from processing.analysis.burn_region import burn_area_mm2, mesh_edges, triangle_areas
 from processing.analysis.projection import sample_views
 from processing.reconstruction.dense import to_output_frame
@@ -37,7 +37,7 @@ log = logging.getLogger(__name__)
 
 ARRAYS = "burn_surface.npz"
 GLB = "burn_surface.glb"
-PAINT = np.array([1.0, 0.16, 0.78])
+PAINT = paint.PAINT
 
 
 def output_views(model_dir: Path, scale_path: Path) -> list[View]:
@@ -166,5 +166,5 @@ def run(
 
 def _write_painted(vertices, faces, colours, q, path: Path) -> None:
     base = np.clip(colours, 0, 1) if len(colours) else np.full((len(vertices), 3), 0.7)
-    alpha = np.clip((np.nan_to_num(q) - 0.3) / 0.4, 0, 1)[:, None] * 0.8
+    alpha = paint.alpha(q)[:, None]
     write_glb(vertices, faces, base * (1 - alpha) + PAINT * alpha, path)

@@ -7,6 +7,7 @@ import datetime as dt
 from dataclasses import dataclass
 
 from pydicom.dataset import Dataset, FileMetaDataset
+from pydicom.sr.coding import Code
 from pydicom.uid import PYDICOM_IMPLEMENTATION_UID, ExplicitVRLittleEndian
 
 from processing.dicom import identity
@@ -31,6 +32,7 @@ PHOTOS = Series("photos", 1, "XC", "Burn photographs")
 MEASUREMENTS = Series("measurements", 2, "SR", "Burn measurements (TID 1500)")
 SURFACE = Series("surface", 3, "M3D", "3D burn surface (STL)")
 REPORT = Series("report", 4, "DOC", "Burn assessment report (PDF)")
+MESH = Series("mesh", 5, "OSS", "3D burn surface with the burn (mesh)")
 
 
 def study_uid(study: StudyInput) -> str:
@@ -80,6 +82,21 @@ def dataset(
     return ds
 
 
+def coded(code: Code) -> Dataset:
+    """A Code Sequence item (PS3.3 Table 8.8-1) of `code`."""
+    item = Dataset()
+    item.CodeValue, item.CodingSchemeDesignator, item.CodeMeaning = code.value, code.scheme_designator, code.meaning
+    return item
+
+
+def reference(instance: Dataset) -> Dataset:
+    """A SOP Instance Reference item (PS3.3 Table 10-11) of `instance`."""
+    item = Dataset()
+    item.ReferencedSOPClassUID = instance.SOPClassUID
+    item.ReferencedSOPInstanceUID = instance.SOPInstanceUID
+    return item
+
+
 def patient(ds: Dataset, study: StudyInput) -> None:
     p = study.patient
     ds.PatientName = identity.patient_name(study)
@@ -104,4 +121,4 @@ def general_study(ds: Dataset, study: StudyInput) -> None:
     ds.StudyID = study.encounter.id.replace("-", "")[-16:]
     ds.StudyDescription = "Burn assessment"
     if study.encounter.clinician:
-        ds.PhysiciansOfRecord = identity.person_name(study.encounter.clinician)
+        ds.PhysiciansOfRecord = identity.one_name(study.encounter.clinician)

@@ -33,11 +33,18 @@ def patient_name(study: StudyInput) -> str:
     p = study.patient
     if p.family_name or p.given_name:
         return f"{person_name(p.family_name)}^{person_name(p.given_name)}"
-    return person_name(p.temporary_label or "")
+    return one_name(p.temporary_label or "")
 
 
 def person_name(text: str) -> str:
     return text.replace("^", " ").replace("=", " ").replace("\\", " ").strip()[:64]
+
+
+def one_name(text: str) -> str:
+    """A name kept as typed, as the family name component: the caret says it is one (PS3.5 6.2.1.2), not the
+    retired single-component form."""
+    name = person_name(text)
+    return f"{name}^" if name else ""
 
 
 def zone(study: StudyInput) -> dt.tzinfo:

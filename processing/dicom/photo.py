@@ -83,6 +83,8 @@ def photo(study: StudyInput, picture: Photo, number: int) -> Dataset:
     if picture.filename:
         ds.ImageComments = f"Photo {picture.filename[:100]} as taken (asset {picture.asset_id})"
     anatomy.describe_image(ds, study.wound(picture.wound_id))
+    if "ImageLaterality" not in ds:
+        ds.Laterality = ""  # General Series, Type 2C: the side is not known
     ds.BitsAllocated = ds.BitsStored = 8
     ds.HighBit = 7
     ds.PixelRepresentation = 0

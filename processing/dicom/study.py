@@ -14,7 +14,7 @@ from pydicom import dcmread
 from pydicom.dataset import Dataset
 
 from base.storage.durable import replace_atomically
-from processing.dicom import common, measurements, photo, report, surface
+from processing.dicom import common, measurements, mesh, photo, report, surface
 from processing.dicom.inputs import StudyInput
 from schemas.analysis import AnalysisStatus
 
@@ -25,7 +25,7 @@ class Study:
     instances: list[Dataset]
 
     def files(self) -> list[tuple[str, bytes]]:
-        """(file name, Part 10 bytes) of each instance, in order: photos, reports, surfaces, the PDF."""
+        """(file name, Part 10 bytes) of each instance, in order: photos, reports, STL surfaces, the PDF, meshes."""
         out = []
         for ds in self.instances:
             buffer = io.BytesIO()
@@ -46,7 +46,7 @@ class Study:
 def build(study: StudyInput) -> Study:
     photos = {p.asset_id: photo.photo(study, p, number) for number, p in enumerate(study.photos, start=1)}
     instances: list[Dataset] = list(photos.values())
-    reports, surfaces = [], []
+    reports, surfaces, meshes = [], [], []
     for analysis in study.analyses:
         if analysis.record.result.status is AnalysisStatus.failed:
             continue
@@ -55,9 +55,11 @@ def build(study: StudyInput) -> Study:
             reports.append(measurements.report(study, analysis, used, len(reports) + 1))
         if surface.exportable(analysis):
             surfaces.append(surface.surface(study, analysis, used, len(surfaces) + 1))
+            meshes.append(mesh.mesh(study, analysis, len(meshes) + 1))
     instances += reports + surfaces
     if study.report_pdf:
         instances.append(report.report_pdf(study, study.report_pdf, 1))
+    instances += meshes
     for ds in instances:
         # With a preamble, pydicom writes the full Part 10 file (preamble, "DICM", file meta) wherever the dataset
         # is written as it stands, as dicomweb-client does for STOW-RS: a PACS is sent files, not bare datasets.

@@ -1,16 +1,14 @@
 """The analysis's 3D surface as an Encapsulated STL (PS3.3 A.85, Supplement 205): the reconstructed skin surface
 as binary STL in millimetres, converted from the painted glTF binary with trimesh.
 
-Why not Surface Scan Mesh Storage: its IOD needs the Surface Mesh module's point, normal and primitive sequences,
-which pydicom and highdicom do not build and few viewers read; Encapsulated STL is read by PACS and 3D viewers as a
-file. STL has no colours: the burn's paint stays in the glTF that the FHIR export and the case bundle carry, and
-its outline is in the SR's figures. Only a scaled analysis (millimetres) is exported: an unscaled mesh has no unit
-DICOM could name.
+It is written beside the Surface Scan Mesh (processing/dicom/mesh.py), which carries the burn, because more
+viewers open an STL (3D Slicer, Orthanc's STL viewer, 3D printing software) than a Surface Scan Mesh. STL has no
+colours: the burn is in the mesh and the SR's figures. Only a scaled analysis (millimetres) is exported: an
+unscaled mesh has no unit DICOM could name.
 """
 
 from __future__ import annotations
 
-import hashlib
 import io
 
 from pydicom.dataset import Dataset
@@ -48,27 +46,19 @@ def surface(study: StudyInput, analysis: Analysis, photos: list[Dataset], number
     ds.PositionReferenceIndicator = ""
     ds.ManufacturerModelName = "burnedge 3D burn analysis"
     ds.DeviceSerialNumber = "none"
-    ds.MeasurementUnitsCodeSequence = [_coded(codes.UCUM.Millimeter)]
+    ds.MeasurementUnitsCodeSequence = [common.coded(codes.UCUM.Millimeter)]
+    ds.AcquisitionDateTime = ""
     ds.BurnedInAnnotation = "NO"
     ds.DocumentTitle = f"3D burn surface, analysis {record.job_id}"
-    ds.ConceptNameCodeSequence = [_coded(codes.DCM.PhotogrammetricImaging3DCAMModel)]  # CID 7061
+    ds.ConceptNameCodeSequence = [common.coded(codes.DCM.PhotogrammetricImaging3DCAMModel)]  # CID 7061
     ds.MIMETypeOfEncapsulatedDocument = "model/stl"
     ds.EncapsulatedDocument = stl + (b"\0" if len(stl) % 2 else b"")
     ds.EncapsulatedDocumentLength = len(stl)
-    ds.ImageComments = f"sha256 of the STL: {hashlib.sha256(stl).hexdigest()}"
     if photos:
-        ds.SourceInstanceSequence = [_reference(p) for p in photos]
+        ds.SourceInstanceSequence = [common.reference(p) for p in photos]
+        # Common Instance Reference: the series (of this study) that holds the instances referenced above.
+        series = Dataset()
+        series.SeriesInstanceUID = photos[0].SeriesInstanceUID
+        series.ReferencedInstanceSequence = [common.reference(p) for p in photos]
+        ds.ReferencedSeriesSequence = [series]
     return ds
-
-
-def _coded(code) -> Dataset:
-    item = Dataset()
-    item.CodeValue, item.CodingSchemeDesignator, item.CodeMeaning = code.value, code.scheme_designator, code.meaning
-    return item
-
-
-def _reference(photo: Dataset) -> Dataset:
-    item = Dataset()
-    item.ReferencedSOPClassUID = photo.SOPClassUID
-    item.ReferencedSOPInstanceUID = photo.SOPInstanceUID
-    return item
