@@ -167,7 +167,7 @@ def _surface(number: int, vertices, faces, comments: str, property_codes, rgb) -
     normals.VectorCoordinateData = np.asarray(tri.vertex_normals, "<f4").tobytes()
     item.SurfacePointsNormalsSequence = [normals]
     primitives = Dataset()
-    # Point indices in DICOM count from 1 (PS3.3 C.27.4).
+    # Point indices in DICOM count from 1 (PS3.3 C.27.2.1.1, referred to by C.27.4.1).
     primitives.LongTrianglePointIndexList = (np.asarray(faces, "<u4") + 1).tobytes()
     for empty in ("LongEdgePointIndexList", "LongVertexPointIndexList"):  # Type 2: present, empty
         setattr(primitives, empty, b"")
