@@ -159,6 +159,10 @@ def row(name: str, scene: Path, work: Path, model: bool, config: Config) -> dict
         "volume_cm3": m.volume_cm3,
         "true_volume_cm3": round(truth["volume_cm3"], 3),
         "confidence": result.confidence.score,
+        "confidence_level": result.confidence.level,
+        "confidence_reasons": result.confidence.reasons,
+        "outline": msgspec.to_builtins(result.confidence.outline) if result.confidence.outline else None,
+        "views_seeing_burn": result.confidence.views_seeing_burn,
         "relief_err_mm_quartic": round(quartic_relief - truth["max_depth_mm"], 2)
         if quartic_relief is not None
         else None,
