@@ -235,3 +235,14 @@ def test_the_reports_model_row_names_the_model_its_network_and_its_held_out_dice
     assert "held-out Dice on real wound photos of this tone 0.80 (40 photos, 95 % CI 0.74–0.85)" in words
     older = _outline_source(confidence.score(**GOOD_CAPTURE, outline=evidence()))
     assert older.startswith("segmentation model burnseg-test; skin")
+
+
+@pytest.mark.parametrize(("area", "photos", "high"), [(3.0, 6, False), (5.9, 7, False), (3.0, 8, True), (6.5, 6, True)])
+def test_a_small_burn_outlined_by_the_model_in_few_photos_is_never_high(area, photos, high):
+    capture = GOOD_CAPTURE | {"views_seeing_burn": photos}
+    conf = confidence.score(**capture, outline=evidence(), area_cm2=area)
+    assert (conf.level == "high") is high
+    said = any("small burn" in r and f"{photos} photos" in r for r in conf.reasons)
+    assert said is not high
+    # a person's outline on every photo: the geometry alone holds for small burns in 6 photos
+    assert confidence.score(**capture, outline=None, area_cm2=area).level == "high"

@@ -214,6 +214,7 @@ def _result(
         outline_cut_views=len(cut_views),
         min_views=config.analysis.min_views_for_confidence,
         outline=outline_evidence.gather(segmentation, measured.view_agreement),
+        area_cm2=measured.metrics.area_cm2,
     )
     notes = []
     if segmentation.unmatched_masks:
