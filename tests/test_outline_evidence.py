@@ -237,7 +237,7 @@ def test_the_reports_model_row_names_the_model_its_network_and_its_held_out_dice
     assert older.startswith("segmentation model burnseg-test; skin")
 
 
-@pytest.mark.parametrize(("area", "photos", "high"), [(3.0, 6, False), (5.9, 7, False), (3.0, 8, True), (6.5, 6, True)])
+@pytest.mark.parametrize(("area", "photos", "high"), [(3.0, 6, False), (7.9, 7, False), (3.0, 8, True), (8.5, 6, True)])
 def test_a_small_burn_outlined_by_the_model_in_few_photos_is_never_high(area, photos, high):
     capture = GOOD_CAPTURE | {"views_seeing_burn": photos}
     conf = confidence.score(**capture, outline=evidence(), area_cm2=area)
