@@ -81,7 +81,8 @@ class CenterPacsService:
 
     def send(self, who: Principal, site_id: str, bundle_id: str) -> PacsSend:
         """Send the case to [dicom] endpoint; the send as recorded. A failure is recorded, audited and raised as
-        PacsFailed: nothing is marked as sent."""
+        PacsFailed: nothing is marked as sent. The right to read the case is checked before the configuration."""
+        self.cases.case(who, site_id, bundle_id)
         if not self.configured:
             raise PacsNotConfigured("no PACS is configured at this burn center: set [dicom] endpoint (docs/dicom.md)")
         target = web.endpoint(self.config.dicom)

@@ -127,7 +127,8 @@ class DicomService:
 
     def send_configured(self, principal: Principal, encounter_id: str) -> PacsSend:
         """The pages' and the API's send: only ever to [dicom] endpoint (a client never names where patient data
-        goes); 409 where none is configured."""
+        goes); 409 where none is configured, after the principal's right to the record (403) is checked."""
+        require_read(principal, RecordKind.encounter)
         if not self.configured:
             raise PacsNotConfigured("no PACS is configured at this gateway: set [dicom] endpoint (docs/dicom.md)")
         return self.send(principal, encounter_id)
